@@ -1,0 +1,1 @@
+"""Reading and writing: meshes in (keeping the user's vertex order), rigs out (glTF)."""

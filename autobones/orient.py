@@ -1,0 +1,311 @@
+"""Find a head's up, front and left-right symmetry plane; map to and from the canonical frame.
+
+Goes beyond the seeds: 003 assumes the head already stands +Y up facing +Z.
+Real heads arrive Z-up or Y-up, facing +-X or +-Z, in millimetres or metres.
+
+Method
+------
+1. The symmetry plane: for each input axis as a starting normal, reflective
+   ICP on an area-uniform sample (pair each point with the nearest point to its
+   mirror image; the pair differences give the normal, their midpoints the
+   offset). The plane that mirrors the sample onto itself best wins.
+2. Up and front: the two remaining input axes, projected into the symmetry
+   plane, give 8 signed (up, front) choices. Each is scored by how well the
+   head, so oriented, overlays a reference head (the built-in default head):
+   a scale-and-translation ICP with trimmed correspondences, no rotation, so
+   every choice is judged as it stands.
+
+Every step is a function of the mesh's shape (sample faces and barycentric
+coordinates do not depend on the frame), so a head rotated by any axis-aligned
+rotation and scaled gives the same canonical head.
+
+The canonical frame is the glTF/landmark-contract frame: +Y up, +Z out of the
+face, +X toward the subject's own left ear, origin on the symmetry plane at the
+sample's centroid, and coordinates divided by the head size (the largest
+extent of the mesh in the canonical axes), so canonical heads measure about 1.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import AutobonesError
+from .sample import sample_surface
+
+AXES = {
+    "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0),
+}
+
+SAMPLE_COUNT = 3000
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A rigid map between a mesh's own frame and the canonical head frame.
+
+    Attributes
+    ----------
+    rotation : (3, 3) float
+        Rows are the canonical +X (subject's left), +Y (up) and +Z (front)
+        directions expressed in the input frame; orthonormal, det +1.
+    origin : (3,) float
+        The canonical origin in input coordinates.
+    size : float
+        Head size in input units: canonical coordinates are input units / size.
+    symmetry_error : float
+        Mean distance, in head sizes, between the sample and its mirror image.
+    """
+
+    rotation: np.ndarray
+    origin: np.ndarray
+    size: float
+    symmetry_error: float = float("nan")
+
+    def to_canonical(self, P):
+        """(k, 3) input-frame points -> (k, 3) canonical points (head sizes)."""
+        return (np.asarray(P, dtype=np.float64) - self.origin) @ self.rotation.T / self.size
+
+    def from_canonical(self, Q):
+        """(k, 3) canonical points -> (k, 3) input-frame points (input units)."""
+        return np.asarray(Q, dtype=np.float64) * self.size @ self.rotation + self.origin
+
+    @property
+    def up(self):
+        """The input axis nearest to canonical up, e.g. ``'+z'``."""
+        return nearest_axis(self.rotation[1])
+
+    @property
+    def front(self):
+        """The input axis nearest to the direction the face looks, e.g. ``'-x'``."""
+        return nearest_axis(self.rotation[2])
+
+    def to_dict(self):
+        return {
+            "up": self.up, "front": self.front,
+            "rotation": self.rotation.tolist(), "origin": self.origin.tolist(),
+            "head_size": float(self.size), "symmetry_error": float(self.symmetry_error),
+        }
+
+
+def nearest_axis(d):
+    d = np.asarray(d, dtype=np.float64)
+    i = int(np.argmax(np.abs(d)))
+    return ("+" if d[i] > 0 else "-") + "xyz"[i]
+
+
+def parse_axis(name, what="axis"):
+    """``'+y'``, ``'y'``, ``'-Z'`` -> unit (3,) vector; AutobonesError otherwise."""
+    key = str(name).strip().lower()
+    key = key if key[:1] in "+-" else "+" + key
+    if key not in AXES:
+        raise AutobonesError(f"--{what} {name!r}: expected one of +x -x +y -y +z -z")
+    return np.array(AXES[key])
+
+
+def detect_frame(V, F, up=None, front=None, reference=None):
+    """Find the canonical frame of a head mesh.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertices in the mesh's own frame and units.
+    F : (m, 3) int
+        Triangles.
+    up, front : str or None
+        Force the up or front axis (``'+z'``, ``'-x'``...); the other is detected.
+    reference : (k, 3) float or None
+        Canonical sample of the reference head to score orientations against;
+        default: the built-in default head.
+
+    Returns
+    -------
+    Frame
+    """
+    P, _, _ = sample_surface(V, F, SAMPLE_COUNT, seed=0)
+    center = P.mean(axis=0)
+    rms = np.sqrt(((P - center) ** 2).sum(axis=1).mean())
+    tree = cKDTree(P)
+    up_v = None if up is None else parse_axis(up, "up")
+    front_v = None if front is None else parse_axis(front, "front")
+
+    if up_v is not None and front_v is not None:
+        if abs(up_v @ front_v) > 0.5:
+            raise AutobonesError(f"--up {up} and --front {front} must be different axes")
+        normal, offset = np.cross(up_v, front_v), center @ np.cross(up_v, front_v)
+        sym_err = _mirror_error(P, tree, normal, offset) / rms
+        candidates = [(up_v, front_v)]
+    else:
+        if up_v is not None or front_v is not None:
+            given = up_v if up_v is not None else front_v
+            starts = [np.array(a) for a in np.eye(3) if abs(a @ given) < 0.5]
+        else:
+            starts = list(np.eye(3))
+        best = None
+        for n0 in starts:
+            n, d = _refine_plane(P, tree, n0, center @ n0)
+            err = _mirror_error(P, tree, n, d)
+            if best is None or err < best[0] - 1e-9 * rms:
+                best = (err, n, d)
+        sym_err, normal, offset = best[0] / rms, best[1], best[2]
+        candidates = _candidates(normal, up_v, front_v)
+
+    if len(candidates) > 1 and up_v is None:
+        # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
+        bases = {}
+        for u, _ in candidates:
+            key = tuple(np.round(u, 6))
+            if key not in bases:
+                bases[key] = _base_score(V, F, u)
+        ranked = sorted(bases.values(), reverse=True)
+        if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1]:
+            winner = max(bases, key=bases.get)
+            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
+    if len(candidates) > 1:
+        ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
+        scores = [_overlay_score(P, center, rms, u, f, ref) for u, f in candidates]
+        up_d, front_d = candidates[int(np.argmin(scores))]
+    else:
+        up_d, front_d = candidates[0]
+    left = np.cross(up_d, front_d)
+    # re-orthogonalise around the refined symmetry normal
+    left = normal * np.sign(normal @ left) if abs(normal @ left) > 0.5 else left
+    front_d = front_d - (front_d @ left) * left
+    front_d /= np.linalg.norm(front_d)
+    up_d = np.cross(front_d, left)
+    R = np.vstack([left, up_d, front_d])
+    origin = center - ((center @ normal) - offset) * normal  # on the symmetry plane
+    used = np.unique(F)
+    local = (V[used] - origin) @ R.T
+    size = float((local.max(axis=0) - local.min(axis=0)).max())
+    return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
+
+
+def _candidates(normal, up_v, front_v):
+    """Signed (up, front) pairs orthogonal to the symmetry normal."""
+    # input axes projected into the symmetry plane, the two least aligned with the normal
+    order = np.argsort(np.abs(normal))[:2]
+    basis = []
+    for i in sorted(order):
+        a = np.eye(3)[i] - (np.eye(3)[i] @ normal) * normal
+        basis.append(a / np.linalg.norm(a))
+    a, b = basis
+    b = b - (b @ a) * a
+    b /= np.linalg.norm(b)
+    out = []
+    for u in (a, -a, b, -b):
+        if up_v is not None and u @ up_v < 0.7:
+            continue
+        for f in ((b, -b) if abs(u @ a) > 0.5 else (a, -a)):
+            if front_v is not None and f @ front_v < 0.7:
+                continue
+            out.append((u, f))
+    if not out:
+        raise AutobonesError("the given --up/--front lies along the head's left-right axis; pick another axis")
+    return out
+
+
+def _base_score(V, F, up):
+    """How strongly the mesh's lowest tenth along ``up`` looks like a cut: flat area facing
+    down plus open boundary rim, relative to the whole surface."""
+    T = V[F]
+    cross = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    area2 = np.linalg.norm(cross, axis=1)
+    ok = area2 > 0
+    normal = np.zeros_like(cross)
+    normal[ok] = cross[ok] / area2[ok, None]
+    h_v = V @ up
+    lo, hi = h_v[F].min(), h_v[F].max()
+    h = (T.mean(axis=1) @ up - lo) / (hi - lo)
+    bottom = h < 0.1
+    flat = (normal @ -up) > np.cos(np.radians(20))
+    flat_part = area2[bottom & flat].sum() / area2.sum()
+    # open rim: edges used by one face only, welded by position so unwelded meshes have none spurious
+    _, inverse = np.unique(np.round(V / (hi - lo), 7), axis=0, return_inverse=True)
+    Fw = inverse.reshape(-1)[F]
+    E = np.sort(np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]]), axis=1)
+    E = E[E[:, 0] != E[:, 1]]
+    uniq, count = np.unique(E, axis=0, return_counts=True)
+    rim = uniq[count == 1]
+    if len(rim) == 0:
+        return float(flat_part)
+    Vw = np.zeros((inverse.max() + 1, 3))
+    Vw[inverse.reshape(-1)] = V
+    mid_h = ((Vw[rim[:, 0]] + Vw[rim[:, 1]]) * 0.5 @ up - lo) / (hi - lo)
+    length = np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)
+    rim_part = length[mid_h < 0.1].sum() / np.sqrt(area2.sum() / 2)
+    return float(flat_part + 0.05 * rim_part)
+
+
+def _refine_plane(P, tree, n, d, iterations=12):
+    for _ in range(iterations):
+        mirrored = P - 2.0 * ((P @ n) - d)[:, None] * n
+        dist, j = tree.query(mirrored)
+        keep = dist <= np.quantile(dist, 0.8)
+        diff = (P - P[j])[keep]
+        mid = 0.5 * (P + P[j])[keep]
+        w, U = np.linalg.eigh(diff.T @ diff)
+        n_new = U[:, -1] * np.sign(U[:, -1] @ n or 1.0)
+        d_new = float(mid.mean(axis=0) @ n_new)
+        if np.allclose(n_new, n, atol=1e-9) and abs(d_new - d) < 1e-12:
+            break
+        n, d = n_new, d_new
+    return n, d
+
+
+def _mirror_error(P, tree, n, d):
+    mirrored = P - 2.0 * ((P @ n) - d)[:, None] * n
+    dist, _ = tree.query(mirrored)
+    return float(np.sort(dist)[: int(0.9 * len(dist))].mean())
+
+
+def _top_part(Q, fraction=0.55):
+    """The upper ``fraction`` of a +Y-up point set, centred and scaled to unit RMS radius:
+    the cranium and face, whether the mesh ends at the neck, the shoulders or a bust base."""
+    y = Q[:, 1]
+    Q = Q[y >= y.max() - fraction * (y.max() - y.min())]
+    Q = Q - Q.mean(axis=0)
+    return Q / np.sqrt((Q ** 2).sum(axis=1).mean())
+
+
+def _overlay_score(P, center, rms, up, front, ref, iterations=20):
+    """Trimmed two-way distance between the head oriented as (up, front) and the reference."""
+    R = np.vstack([np.cross(up, front), up, front])
+    Q = _top_part(P @ R.T)
+    ref = _top_part(ref)
+    ref_tree, q_tree = cKDTree(ref), None
+    s, t = 1.0, np.zeros(3)
+    for _ in range(iterations):
+        X = s * Q + t
+        dist, j = ref_tree.query(X)
+        keep = dist <= np.quantile(dist, 0.8)
+        A, B = Q[keep], ref[j[keep]]
+        # least-squares scale and translation: B ~ s A + t
+        Am, Bm = A.mean(axis=0), B.mean(axis=0)
+        s = float(((A - Am) * (B - Bm)).sum() / ((A - Am) ** 2).sum())
+        s = min(max(s, 0.5), 2.0)
+        t = Bm - s * Am
+    X = s * Q + t
+    d1, _ = ref_tree.query(X)
+    q_tree = cKDTree(X)
+    d2, _ = q_tree.query(ref)
+    trim = lambda d: float(np.sort(d)[: int(0.8 * len(d))].mean())
+    return trim(d1) + trim(d2)
+
+
+@lru_cache(maxsize=1)
+def default_reference():
+    """Canonical sample of the built-in default head (cached; read-only)."""
+    from generic_rig import default_head_path
+    from .io.mesh import load_mesh
+
+    V, F = load_mesh(default_head_path())
+    P, _, _ = sample_surface(V, F, SAMPLE_COUNT, seed=1)
+    P = P - P.mean(axis=0)
+    P /= np.sqrt((P ** 2).sum(axis=1).mean())
+    P.setflags(write=False)
+    return P

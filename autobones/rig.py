@@ -1,0 +1,117 @@
+"""The Rig: a mesh with its skeleton, skin weights and labels, and how it is saved."""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import AutobonesError
+from .io.gltf import write_glb
+from .segment import LABEL_NAMES
+from .skeleton import Skeleton
+
+
+def sidecar_paths(glb_path):
+    """``x.glb`` or ``x.rig.glb`` -> (``x.rig.json``, ``x.weights.npz``)."""
+    base = os.fspath(glb_path)
+    if base.lower().endswith(".glb"):
+        base = base[:-4]
+    if base.endswith(".rig"):
+        base = base[:-4]
+    return base + ".rig.json", base + ".weights.npz"
+
+
+@dataclass
+class Rig:
+    """A rigged head, everything in the input mesh's own frame and units.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float
+        The input vertices, unchanged and in input order.
+    faces : (m, 3) int
+        The input triangles.
+    skeleton : Skeleton
+        Bones (``neck``, ``head``, ``face_00``...).
+    weights : (n, b) float
+        Skin weights, rows summing to 1, columns in skeleton order.
+    labels : (n,) int8
+        Depth group per vertex: 0 face, 1 middle, 2 back.
+    facial_mask : (n,) bool
+        Vertices the facial bones were clustered on.
+    frame : orient.Frame
+        Detected (or given) canonical frame.
+    options : dict
+        Options the rig was made with.
+    timings : dict
+        Seconds per pipeline stage.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    skeleton: Skeleton
+    weights: np.ndarray
+    labels: np.ndarray
+    facial_mask: np.ndarray
+    frame: object
+    options: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    def sidecar(self):
+        """The JSON sidecar as a dict."""
+        from . import __version__
+
+        return {
+            "format": "autobones-rig/1",
+            "autobones_version": __version__,
+            "options": self.options,
+            "frame": self.frame.to_dict(),
+            "vertex_count": int(len(self.vertices)),
+            "bones": self.skeleton.to_list(),
+            "label_names": list(LABEL_NAMES),
+            "labels": self.labels.astype(int).tolist(),
+            "facial_mask": np.flatnonzero(self.facial_mask).tolist(),
+            **self.extra,
+        }
+
+    def save(self, path):
+        """Write ``path`` (.glb), its ``.rig.json`` sidecar and ``.weights.npz``.
+
+        All three are written to temporary files in the target folder first and
+        renamed only when every one is complete, so a failure leaves no partial
+        output. Returns the three paths.
+        """
+        path = os.fspath(path)
+        if not path.lower().endswith(".glb"):
+            raise AutobonesError(f"{path}: the output must be a .glb file")
+        folder = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(folder):
+            raise AutobonesError(f"{path}: the folder {folder} does not exist")
+        json_path, npz_path = sidecar_paths(path)
+        targets = [path, json_path, npz_path]
+        temps = []
+        try:
+            for target in targets:
+                fd, tmp = tempfile.mkstemp(prefix=".autobones-", suffix=os.path.splitext(target)[1], dir=folder)
+                os.close(fd)
+                temps.append(tmp)
+            write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
+                      extras={"autobones": {"sidecar": os.path.basename(json_path)}})
+            with open(temps[1], "w") as fh:
+                json.dump(self.sidecar(), fh, indent=1)
+            with open(temps[2], "wb") as fh:
+                np.savez_compressed(fh, weights=self.weights.astype(np.float32),
+                                    bone_names=np.array(self.skeleton.names))
+            for tmp, target in zip(temps, targets):
+                os.replace(tmp, target)
+        except OSError as exc:
+            raise AutobonesError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+        finally:
+            for tmp in temps:
+                if os.path.exists(tmp):
+                    os.remove(tmp)
+        return targets

@@ -1,0 +1,1 @@
+"""The ``autobones`` command line: a thin shell over the library."""
