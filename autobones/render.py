@@ -403,12 +403,11 @@ def rasterize(V, F, camera):
         win = np.flatnonzero(z <= zbuf[pix])
         if len(win) == 0:
             continue
-        # One winner per pixel even on exact ties: face and bary from the same
-        # fragment.
+        # One winner per pixel even on exact depth ties, so face and bary come
+        # from the same fragment (repeated pixels in pw then write equal values).
         pw = pix[win]
         pick = np.empty(npix, dtype=np.int64)
         pick[pw] = win
-        pw = np.unique(pw)
         f = pick[pw]
         fbuf[pw] = tri[t[f]]
         bbuf[pw, 0], bbuf[pw, 1], bbuf[pw, 2] = l0[f], l1[f], l2[f]
@@ -734,8 +733,9 @@ def render_views(V, F, vertex_colors=None, views=("front", "side"), size=(512, 5
             img = draw_segments(img, a, b, color=segment_color)
         if points is not None and len(points):
             p, d = cam.project(points)
-            r = np.clip(np.rint(p[:, 1]), 0, H - 1).astype(np.int64)
-            c = np.clip(np.rint(p[:, 0]), 0, W - 1).astype(np.int64)
+            q = np.nan_to_num(np.rint(p), nan=0.0, posinf=0.0, neginf=0.0)
+            r = np.clip(q[:, 1], 0, H - 1).astype(np.int64)
+            c = np.clip(q[:, 0], 0, W - 1).astype(np.int64)
             visible = ~(d > buf.depth[r, c] + tol)
             img = draw_points(img, p, labels=point_labels, color=point_color, filled=visible)
         panels.append(img)
