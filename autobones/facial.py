@@ -183,7 +183,25 @@ def vertex_normals(V, F):
     return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
 
 
-def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, **kwargs):
+def _under_skin(V, F, P, partner, max_depth):
+    """Centroids deeper than ``max_depth`` under the skin (a sparse bone on a curved or boxy
+    face) are pulled toward their closest surface point, then re-mirrored."""
+    import igl
+
+    V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
+    P = P.copy()
+    for _ in range(3):  # mirroring can move a point off the surface again; a few rounds settle it
+        d2, _, closest = igl.point_mesh_squared_distance(P, V, F)
+        d = np.sqrt(d2)
+        deep = d > max_depth
+        if not deep.any():
+            break
+        P[deep] = closest[deep] + (P[deep] - closest[deep]) * (max_depth / d[deep])[:, None]
+        P = 0.5 * (P + P[partner] * MIRROR)
+    return P
+
+
+def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_depth=0.02, **kwargs):
     """Place facial bones on the facial mask of a canonical head.
 
     Parameters
@@ -198,6 +216,8 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, **kwargs
         Number of facial bones.
     bone_length : float
         Length of each bone (head sizes), pointing along the cluster's mean normal.
+    max_depth : float
+        A centroid deeper than this under the skin (head sizes) is moved up to it.
 
     Returns
     -------
@@ -209,7 +229,7 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, **kwargs
     idx = np.flatnonzero(mask)
     model = FacialBones(n_bones=n_bones, random_state=random_state, **kwargs)
     model.fit(V[idx], sample_weight=vertex_areas(V, F)[idx])
-    heads = model.cluster_centers_
+    heads = _under_skin(V, F, model.cluster_centers_, model.partner_, max_depth)
     N = vertex_normals(V, F)[idx] * vertex_areas(V, F)[idx, None]
     dirs = np.stack([np.bincount(model.labels_, weights=N[:, j], minlength=n_bones) for j in range(3)], axis=1)
     if model.symmetric:

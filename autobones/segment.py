@@ -105,9 +105,16 @@ def segment_head(V, F, sample_count=4000, seed=0):
     head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), head_mean[2]])
     half = 0.5 * (lower[:, 1].max() - lower[:, 1].min())
     neck_root = neck_mean - (half / neck_dir[1]) * neck_dir
+    # keep the bones inside the volume (horns, a long muzzle or shoulders can put the
+    # geometric ends outside): pull each end toward its part's mean until it is inside
+    joint = _inside(V, F, joint, head_mean)
+    head_tail = _inside(V, F, head_tail, head_mean)
+    neck_root = _inside(V, F, neck_root, neck_mean)
     face_s = S[s_labels == FACE]
+    level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
+    head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
     cut = -np.inf
-    for h in (_chin_height(face_s, neck_height), neck_height):
+    for h in (_chin_height(face_s, neck_height, head_depth, S[:, 1].max()), neck_height):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
         if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
             cut = h
@@ -117,6 +124,18 @@ def segment_head(V, F, sample_count=4000, seed=0):
         labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
         linkage=Z, sample_depth=depth, neck_height=float(neck_height),
         head_bone=np.array([joint, head_tail]), neck_bone=np.array([neck_root, joint]))
+
+
+def _inside(V, F, point, anchor, steps=20):
+    """``point`` moved toward ``anchor`` until its generalized winding number exceeds 1/2
+    (unchanged if already inside, or if the anchor is not inside either: open masks)."""
+    import igl
+
+    t = np.linspace(1.0, 0.0, steps + 1)
+    Q = anchor + t[:, None] * (point - anchor)
+    w = igl.fast_winding_number(np.ascontiguousarray(V), np.ascontiguousarray(F), Q)
+    ok = np.flatnonzero(w > 0.5)
+    return Q[ok[0]] if len(ok) else point
 
 
 def _ordered_cut(Z, value, n_groups):
@@ -138,11 +157,15 @@ def _carry(sample_value, sample_label, value):
     return np.where(left_closer, sl[i - 1], sl[i])
 
 
-def _chin_height(face, neck_height, strip=0.03, bin_size=0.01):
-    """Height of the menton: below the nose tip, where the midline front profile of the
-    facial group steps back the most over a short drop (the underside of the chin).
+def _chin_height(face, neck_height, head_depth, top, strip=0.03, bin_size=0.01):
+    """Height of the menton, or None if no chin step is found.
 
-    ``face``: (k, 3) canonical points of the facial group. None if no clear step.
+    Below the nose tip, the midline front profile of the facial group steps back
+    sharply at the nose base and under the chin (and, on a bust, at its base).
+    Of those steps, the chin is the one nearest the height anthropometry expects
+    (vertex to menton is about 1.2 times the head's depth; anthropometry.md).
+
+    ``face``: (k, 3) canonical points of the facial group.
     """
     mid = face[np.abs(face[:, 0]) < strip]
     if len(mid) < 20:
@@ -162,12 +185,14 @@ def _chin_height(face, neck_height, strip=0.03, bin_size=0.01):
     if valid.sum() < 4:
         return None
     front = np.interp(np.arange(len(front)), np.flatnonzero(valid), front[valid])
-    # drop over the next 3 bins (3 head-size percent of height)
-    drop = front[:-3] - front[3:]
-    i = int(np.argmax(drop))
-    if drop[i] < 0.05:  # no step of at least 5% of head size: no chin to find
+    # drop over the next 3 bins (3% of head size of height)
+    drop = np.r_[front[:-3] - front[3:], np.zeros(3)]
+    peak = (drop >= 0.04) & (drop >= np.r_[0, drop[:-1]]) & (drop >= np.r_[drop[1:], 0])
+    if not peak.any():
         return None
-    return float(edges[i])
+    expected = top - 1.2 * head_depth
+    steps = edges[peak]
+    return float(steps[np.argmin(np.abs(steps - expected))])
 
 
 def _neck_direction(points):
