@@ -171,13 +171,12 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         up_d, front_d = candidates[int(np.argmin(scores))]
     else:
         up_d, front_d = candidates[0]
-    left = np.cross(up_d, front_d)
-    # re-orthogonalise around the refined symmetry normal
-    left = normal * np.sign(normal @ left) if abs(normal @ left) > 0.5 else left
-    front_d = front_d - (front_d @ left) * left
-    front_d /= np.linalg.norm(front_d)
-    up_d = np.cross(front_d, left)
-    R = np.vstack([left, up_d, front_d])
+    # an exact frame from the refined symmetry normal and the chosen up, in an order that does
+    # not depend on which input axis was which (so rotated inputs give the same frame)
+    left = normal * np.sign(normal @ np.cross(up_d, front_d))
+    up_d = up_d - (up_d @ left) * left
+    up_d /= np.linalg.norm(up_d)
+    R = np.vstack([left, up_d, np.cross(left, up_d)])
     origin = center - ((center @ normal) - offset) * normal  # on the symmetry plane
     used = np.unique(F)
     local = (V[used] - origin) @ R.T
@@ -186,24 +185,20 @@ def detect_frame(V, F, up=None, front=None, reference=None):
 
 
 def _candidates(normal, up_v, front_v):
-    """Signed (up, front) pairs orthogonal to the symmetry normal."""
-    # input axes projected into the symmetry plane, the two least aligned with the normal
-    order = np.argsort(np.abs(normal))[:2]
-    basis = []
-    for i in sorted(order):
-        a = np.eye(3)[i] - (np.eye(3)[i] @ normal) * normal
-        basis.append(a / np.linalg.norm(a))
-    a, b = basis
-    b = b - (b @ a) * a
-    b /= np.linalg.norm(b)
+    """Signed (up, front) pairs, orthonormal and orthogonal to the symmetry normal: up is an
+    input axis projected into the symmetry plane, front completes the frame."""
     out = []
-    for u in (a, -a, b, -b):
-        if up_v is not None and u @ up_v < 0.7:
-            continue
-        for f in ((b, -b) if abs(u @ a) > 0.5 else (a, -a)):
-            if front_v is not None and f @ front_v < 0.7:
+    for i in sorted(np.argsort(np.abs(normal))[:2]):
+        for sign in (1.0, -1.0):
+            u = sign * np.eye(3)[i]
+            u = u - (u @ normal) * normal
+            u /= np.linalg.norm(u)
+            if up_v is not None and u @ up_v < 0.7:
                 continue
-            out.append((u, f))
+            for f in (np.cross(normal, u), np.cross(u, normal)):
+                if front_v is not None and f @ front_v < 0.7:
+                    continue
+                out.append((u, f))
     if not out:
         raise AutobonesError("the given --up/--front lies along the head's left-right axis; pick another axis")
     return out

@@ -110,6 +110,9 @@ def segment_head(V, F, sample_count=4000, seed=0):
     joint = _inside(V, F, joint, head_mean)
     head_tail = _inside(V, F, head_tail, head_mean)
     neck_root = _inside(V, F, neck_root, neck_mean)
+    # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
+    shift = _inside_shift(V, F, [(joint, head_tail), (neck_root, joint)])
+    joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
     face_s = S[s_labels == FACE]
     level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
     head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
@@ -136,6 +139,22 @@ def _inside(V, F, point, anchor, steps=20):
     w = igl.fast_winding_number(np.ascontiguousarray(V), np.ascontiguousarray(F), Q)
     ok = np.flatnonzero(w > 0.5)
     return Q[ok[0]] if len(ok) else point
+
+
+def _inside_shift(V, F, segments, samples=21, limit=0.1, step=0.005):
+    """Smallest depth offset (0, -step, +step, -2 step, ...) that puts every sample of the
+    segments inside the volume; zero if none within ``limit`` does (open masks)."""
+    import igl
+
+    t = np.linspace(0.0, 1.0, samples)[:, None]
+    P = np.vstack([a + t * (b - a) for a, b in segments])
+    offsets = [0.0] + [s * k * step for k in range(1, int(limit / step) + 1) for s in (-1, 1)]
+    VV, FF = np.ascontiguousarray(V), np.ascontiguousarray(F)
+    for dz in offsets:
+        shift = np.array([0.0, 0.0, dz])
+        if (igl.fast_winding_number(VV, FF, P + shift) > 0.5).all():
+            return shift
+    return np.zeros(3)
 
 
 def _ordered_cut(Z, value, n_groups):

@@ -1,0 +1,95 @@
+"""autobones.orient: up, front and symmetry plane of heads in any axis-aligned frame and unit."""
+import itertools
+
+import numpy as np
+import pytest
+
+import autobones
+from autobones.errors import AutobonesError
+from autobones.io.mesh import load_mesh
+from autobones.orient import detect_frame, parse_axis
+
+from shared_data import data
+
+
+def rotations24():
+    """The 24 proper rotations that map coordinate axes to coordinate axes."""
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1, -1), repeat=3):
+            Q = np.zeros((3, 3))
+            Q[np.arange(3), perm] = signs
+            if np.linalg.det(Q) > 0:
+                out.append(Q)
+    return out
+
+
+KNOWN = {  # file: (up, front) in the file's own axes, checked by eye on renders
+    "ict/generic_neutral_mesh.obj": ("+y", "+z"),
+    "ict/identity002.obj": ("+y", "+z"),
+    "misc/LeePerrySmith.obj": ("+y", "+z"),
+    "menpo3d/james.obj": ("+y", "+z"),
+    "menpo3d/template.ply": ("+y", "+z"),
+    "misc/demosthenes-low-res.obj": ("+y", "+z"),
+    "misc/goathead.obj": ("+y", "-x"),
+}
+
+
+@pytest.mark.parametrize("rel", sorted(KNOWN))
+def test_detects_up_and_front_of_shared_heads(rel):
+    V, F = load_mesh(data(rel))
+    frame = detect_frame(V, F)
+    assert (frame.up, frame.front) == KNOWN[rel]
+    R = frame.rotation
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-9)
+    assert np.linalg.det(R) > 0
+
+
+def test_frame_round_trip():
+    V, F = load_mesh(data("misc/LeePerrySmith.obj"))
+    frame = detect_frame(V, F)
+    np.testing.assert_allclose(frame.from_canonical(frame.to_canonical(V)), V, atol=1e-9)
+    C = frame.to_canonical(V)
+    assert np.ptp(C, axis=0).max() == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("k", range(24))
+def test_all_24_orientations_in_millimetres_give_the_same_frame(k):
+    V, F = load_mesh(data("ict/generic_neutral_mesh.obj"))
+    ref = detect_frame(V, F)
+    Q = rotations24()[k]
+    frame = detect_frame(1000.0 * V @ Q.T, F)
+    # the canonical axes, expressed back in the original frame, are the same
+    np.testing.assert_allclose(frame.rotation @ Q, ref.rotation, atol=1e-6)
+    assert frame.size == pytest.approx(1000.0 * ref.size, rel=1e-9)
+    np.testing.assert_allclose(Q.T @ frame.origin / 1000.0, ref.origin, atol=1e-6 * ref.size)
+
+
+def test_the_same_bones_in_every_orientation_and_unit():
+    V, F = load_mesh(data("misc/LeePerrySmith.obj"))
+    ref = autobones.place((V, F), density="sparse")
+    for Q in rotations24():
+        rig = autobones.place((1000.0 * V @ Q.T, F), density="sparse")
+        heads = rig.skeleton.heads @ Q / 1000.0  # back to the original frame and unit
+        np.testing.assert_allclose(heads, ref.skeleton.heads, atol=1e-6 * ref.frame.size)
+        np.testing.assert_allclose(rig.weights, ref.weights, atol=1e-6)
+
+
+def test_overrides_are_obeyed():
+    V, F = load_mesh(data("misc/robot_head_neutral.obj"))
+    frame = detect_frame(V, F, up="+y", front="+z")
+    assert (frame.up, frame.front) == ("+y", "+z")
+    frame = detect_frame(V, F, up="y")  # front detected within the plane orthogonal to up
+    assert frame.up == "+y" and frame.front in ("+z", "-z", "+x", "-x")
+
+
+@pytest.mark.parametrize("up,front", [("+q", None), ("+y", "-y"), ("x", "x")])
+def test_bad_overrides_are_clear_errors(up, front):
+    V, F = load_mesh(data("misc/robot_head_neutral.obj"))
+    with pytest.raises(AutobonesError):
+        detect_frame(V, F, up=up, front=front)
+
+
+def test_parse_axis():
+    np.testing.assert_array_equal(parse_axis("-Z"), [0, 0, -1])
+    np.testing.assert_array_equal(parse_axis("x"), [1, 0, 0])
