@@ -81,9 +81,22 @@ def cmd_place(args):
 COMMANDS = {"place": cmd_place}
 
 
+def _axis_values(argv):
+    """argparse reads ``--front -y`` as two options; join such pairs as ``--front=-y``."""
+    out, i = [], 0
+    while i < len(argv):
+        if argv[i] in ("--up", "--front") and i + 1 < len(argv) and argv[i + 1].lower() in ("-x", "-y", "-z"):
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(argv[i])
+            i += 1
+    return out
+
+
 def main(argv=None):
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_axis_values(sys.argv[1:] if argv is None else list(argv)))
     if args.version:
         import autobones
 

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Everything the tests need beyond `pip install .`: Python test packages, Blender 3.4
+# (a real glTF client, headless) with the numpy its glTF importer needs, and the Khronos
+# glTF validator (npm). Idempotent; run as root (or with sudo) on Debian/Ubuntu.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python -m pip install -q -e '.[test]'
+need=()
+command -v blender >/dev/null || need+=(blender)
+dpkg -s python3-numpy >/dev/null 2>&1 || need+=(python3-numpy)
+command -v node >/dev/null || need+=(nodejs npm)
+if ((${#need[@]})); then
+  SUDO=$([ "$(id -u)" = 0 ] && echo "" || echo sudo)
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
+fi
+[ -d tools/gltf-validator/node_modules/gltf-validator ] || \
+  npm install --prefix tools/gltf-validator --no-audit --no-fund --silent >/dev/null
