@@ -78,7 +78,7 @@ def weld(V, F, tol):
     return Vw, Fw[ok], index
 
 
-def bone_heat_weights(V, F, segments, weld_tol=1e-6):
+def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     """Skin weights of every vertex for every bone.
 
     Parameters
@@ -91,6 +91,9 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6):
         Bone heads and tails, same frame as ``V``.
     weld_tol : float
         Vertices closer than this share heat (same units as ``V``).
+    prune : float
+        Weights below this fraction of the vertex's largest weight are set to
+        zero and the rest renormalised.
 
     Returns
     -------
@@ -114,7 +117,7 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6):
     dmin = np.maximum(dmin, 1e-3 * scale)
     nearest = D <= (D.min(axis=1, keepdims=True) * (1 + 1e-9) + 1e-15)
     Pn = nearest / nearest.sum(axis=1, keepdims=True)
-    mh = M.diagonal() / dmin ** 2
+    mh = heat * M.diagonal() / dmin ** 2
     A = (L + sp.diags(mh)).tocsc()
     # a component where every vertex has zero mass (degenerate faces only) would be singular
     A = A + sp.diags(np.where(mh > 0, 0.0, 1.0))
@@ -123,6 +126,9 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6):
     Wu = splu(A, permc_spec="MMD_AT_PLUS_A").solve(rhs)
     Wu = np.clip(Wu, 0.0, None)
     Wu /= np.maximum(Wu.sum(axis=1, keepdims=True), 1e-300)
+    if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp
+        Wu[Wu < prune * Wu.max(axis=1, keepdims=True)] = 0.0
+        Wu /= Wu.sum(axis=1, keepdims=True)
 
     Ww = np.empty((len(Vw), len(segments)))
     Ww[used] = Wu
