@@ -258,36 +258,46 @@ def _mirror_error(P, tree, n, d):
     return float(np.sort(dist)[: int(0.9 * len(dist))].mean())
 
 
-def _top_part(Q, fraction=0.55):
-    """The upper ``fraction`` of a +Y-up point set, centred and scaled to unit RMS radius:
-    the cranium and face, whether the mesh ends at the neck, the shoulders or a bust base."""
+def _top_part(Q):
+    """The cranium and face of a +Y-up point set, centred and scaled to unit RMS radius,
+    whether the mesh ends at the neck, the shoulders or a bust base: the top slice as tall as
+    1.2 head widths, the head width measured on the cap above the widest part."""
     y = Q[:, 1]
-    Q = Q[y >= y.max() - fraction * (y.max() - y.min())]
+    band = 0.3 * np.ptp(y)
+    for _ in range(2):  # settle the width on the head, not on shoulders
+        width = np.ptp(Q[y >= y.max() - band, 0])
+        band = 0.6 * width
+    Q = Q[y >= y.max() - 1.2 * width]
     Q = Q - Q.mean(axis=0)
     return Q / np.sqrt((Q ** 2).sum(axis=1).mean())
 
 
-def _overlay_score(P, center, rms, up, front, ref, iterations=20):
-    """Trimmed two-way distance between the head oriented as (up, front) and the reference."""
+def _overlay_score(P, center, rms, up, front, ref, iterations=30, max_turn=35.0):
+    """Trimmed two-way distance between the head oriented as (up, front) and the reference,
+    after a similarity ICP that may turn the head by at most ``max_turn`` degrees (a tilted
+    or turned head still matches; a head facing the other way cannot turn round)."""
     R = np.vstack([np.cross(up, front), up, front])
     Q = _top_part(P @ R.T)
     ref = _top_part(ref)
-    ref_tree, q_tree = cKDTree(ref), None
-    s, t = 1.0, np.zeros(3)
+    ref_tree = cKDTree(ref)
+    rot, s, t = np.eye(3), 1.0, np.zeros(3)
     for _ in range(iterations):
-        X = s * Q + t
+        X = s * Q @ rot.T + t
         dist, j = ref_tree.query(X)
         keep = dist <= np.quantile(dist, 0.8)
         A, B = Q[keep], ref[j[keep]]
-        # least-squares scale and translation: B ~ s A + t
+        # Umeyama: the similarity B ~ s rot A + t in least squares
         Am, Bm = A.mean(axis=0), B.mean(axis=0)
-        s = float(((A - Am) * (B - Bm)).sum() / ((A - Am) ** 2).sum())
-        s = min(max(s, 0.5), 2.0)
-        t = Bm - s * Am
-    X = s * Q + t
+        U, S, Wt = np.linalg.svd((B - Bm).T @ (A - Am))
+        D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Wt))])
+        new_rot = U @ D @ Wt
+        if np.degrees(np.arccos(np.clip((np.trace(new_rot) - 1) / 2, -1, 1))) <= max_turn:
+            rot = new_rot
+        s = float(np.clip((S * np.diag(D)).sum() / ((A - Am) ** 2).sum(), 0.5, 2.0))
+        t = Bm - s * Am @ rot.T
+    X = s * Q @ rot.T + t
     d1, _ = ref_tree.query(X)
-    q_tree = cKDTree(X)
-    d2, _ = q_tree.query(ref)
+    d2, _ = cKDTree(X).query(ref)
     trim = lambda d: float(np.sort(d)[: int(0.8 * len(d))].mean())
     return trim(d1) + trim(d2)
 

@@ -93,6 +93,6 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0):
                "up": up, "front": front, "random_state": random_state}
     return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
-               timings=timings,
+               timings=timings, segmentation=seg,
                extra={"source": source, "facial_bone_partner": model.partner_.tolist(),
                       "neck_height_canonical": seg.neck_height})

@@ -48,6 +48,9 @@ class Rig:
         Options the rig was made with.
     timings : dict
         Seconds per pipeline stage.
+    segmentation : segment.HeadSegmentation or None
+        The depth grouping with its full merge tree: ``rig.segmentation.groups(4)``
+        cuts it at another group count (seed 003 §3.1).
     """
 
     vertices: np.ndarray
@@ -60,6 +63,7 @@ class Rig:
     options: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+    segmentation: object = None
 
     def sidecar(self):
         """The JSON sidecar as a dict."""
@@ -75,6 +79,10 @@ class Rig:
             "label_names": list(LABEL_NAMES),
             "labels": self.labels.astype(int).tolist(),
             "facial_mask": np.flatnonzero(self.facial_mask).tolist(),
+            **({} if self.segmentation is None else {
+                # the last merges of the depth tree: a large jump before a count says that
+                # many groups are natural for this head
+                "depth_merge_distances": self.segmentation.linkage[-8:, 2][::-1].tolist()}),
             **self.extra,
         }
 

@@ -117,7 +117,7 @@ def segment_head(V, F, sample_count=4000, seed=0):
     level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
     head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
     cut = -np.inf
-    for h in (_chin_height(face_s, neck_height, head_depth, S[:, 1].max()), neck_height):
+    for h in (_chin_height(S, neck_height, head_depth, S[:, 1].max()), neck_height):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
         if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
             cut = h
@@ -176,17 +176,17 @@ def _carry(sample_value, sample_label, value):
     return np.where(left_closer, sl[i - 1], sl[i])
 
 
-def _chin_height(face, neck_height, head_depth, top, strip=0.03, bin_size=0.01):
+def _chin_height(points, neck_height, head_depth, top, strip=0.03, bin_size=0.01):
     """Height of the menton, or None if no chin step is found.
 
-    Below the nose tip, the midline front profile of the facial group steps back
+    Below the nose tip, the midline front profile of the head steps back
     sharply at the nose base and under the chin (and, on a bust, at its base).
     Of those steps, the chin is the one nearest the height anthropometry expects
     (vertex to menton is about 1.2 times the head's depth; anthropometry.md).
 
-    ``face``: (k, 3) canonical points of the facial group.
+    ``points``: (k, 3) canonical surface points of the whole head.
     """
-    mid = face[np.abs(face[:, 0]) < strip]
+    mid = points[np.abs(points[:, 0]) < strip]
     if len(mid) < 20:
         return None
     head = mid[mid[:, 1] > neck_height]  # a bust's chest can stand further forward than the nose
@@ -210,8 +210,8 @@ def _chin_height(face, neck_height, head_depth, top, strip=0.03, bin_size=0.01):
     if not peak.any():
         return None
     expected = top - 1.2 * head_depth
-    steps = edges[peak]
-    return float(steps[np.argmin(np.abs(steps - expected))])
+    ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
+    return float(ends[np.argmin(np.abs(ends - expected))])
 
 
 def _neck_direction(points):

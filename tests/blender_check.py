@@ -114,7 +114,9 @@ def main(argv):
     P_file = accessor(doc, body, prim["attributes"]["POSITION"]).astype(np.float64)
     used = np.unique(accessor(doc, body, prim["indices"]))
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    result = bpy.ops.import_scene.gltf(filepath=glb)
+    # "BLENDER" keeps each joint's own axes (the writer points +Y from head to tail), so the
+    # bones come in as placed; the default heuristic re-aims them at their children
+    result = bpy.ops.import_scene.gltf(filepath=glb, bone_heuristic="BLENDER")
     report = {"blender": bpy.app.version_string, "import_result": sorted(result)}
     arms = [o for o in bpy.context.scene.objects if o.type == "ARMATURE"]
     meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
@@ -130,6 +132,7 @@ def main(argv):
     names = [b.name for b in arm.data.bones]
     report["bones"] = names
     report["bone_heads"] = {b.name: to_file_frame(arm.matrix_world @ b.head_local) for b in arm.data.bones}
+    report["bone_tails"] = {b.name: to_file_frame(arm.matrix_world @ b.tail_local) for b in arm.data.bones}
     report["bone_parents"] = {b.name: (b.parent.name if b.parent else None) for b in arm.data.bones}
 
     # vertex groups

@@ -291,9 +291,14 @@ def test_blender_imports_armature_with_one_vertex_group_per_bone(blender_report,
     assert rep["armature"] and rep["mesh_objects"] == 1 and rep["armature_modifier"], rep.get("objects")
     assert rep["bones"] == list(skel.names)
     assert [rep["bone_parents"][n] for n in skel.names] == [skel.names[p] if p >= 0 else None for p in skel.parents]
-    # Blender bones start at the joints (their tails follow the importer's bone heuristic)
+    # Blender bones start at the joints and, imported with the "BLENDER" bone heuristic, point
+    # the way the rig's bones do (their length is the importer's choice)
     heads = np.array([rep["bone_heads"][n] for n in skel.names])
     np.testing.assert_allclose(heads, skel.heads, atol=1e-5 * rig.frame.size)
+    tails = np.array([rep["bone_tails"][n] for n in skel.names])
+    d_bl, d_rig = tails - heads, skel.tails - skel.heads
+    cos = (d_bl * d_rig).sum(1) / np.linalg.norm(d_bl, axis=1) / np.linalg.norm(d_rig, axis=1)
+    assert cos.min() > 0.9999, cos
     groups = rep["vertex_groups"]
     assert all(groups[n]["exists"] for n in skel.names) and rep["extra_vertex_groups"] == []
     # a bone with no weighted vertex would be written but useless; the rig never makes one
@@ -355,7 +360,7 @@ def test_blender_rotating_a_facial_bone_moves_vertices_near_it(blender_report, n
     assert pose["max_displacement"] > 0.01 * size, msg
     assert pose["max_displacement_outside_chain"] <= 1e-5 * size, msg
     assert pose["max_error_vs_lbs"] <= 1e-5 * size, msg
-    # the largest motion is near the bone, the top of the head barely moves
-    assert np.linalg.norm(np.array(pose["argmax_rest_position"]) - pivot) < 0.4 * size, msg
+    # the motion is centred near the bone, the top of the head barely moves (the single largest
+    # displacement can be a separate part, e.g. the robot's ear, riding its nearest bone rigidly)
     assert np.linalg.norm(np.array(pose["strongly_moved_centroid"]) - pivot) < 0.4 * size, msg
     assert pose["top_displacement"] < 0.25 * pose["max_displacement"], msg

@@ -32,12 +32,15 @@ KNOWN = {  # file: (up, front) in the file's own axes, checked by eye on renders
     "menpo3d/template.ply": ("+y", "+z"),
     "misc/demosthenes-low-res.obj": ("+y", "+z"),
     "misc/goathead.obj": ("+y", "-x"),
+    "misc/robot_head_neutral.obj": ("+y", "+z"),
+    "misc/fsaverage_head.obj": ("+z", "+y"),
+    None: ("+y", "+z"),  # the built-in default head
 }
 
 
-@pytest.mark.parametrize("rel", sorted(KNOWN))
+@pytest.mark.parametrize("rel", list(KNOWN), ids=[str(k) for k in KNOWN])
 def test_detects_up_and_front_of_shared_heads(rel):
-    V, F = load_mesh(data(rel))
+    V, F = load_mesh(data(rel)) if rel else autobones.place.__globals__["default_head"]()
     frame = detect_frame(V, F)
     assert (frame.up, frame.front) == KNOWN[rel]
     R = frame.rotation

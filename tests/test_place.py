@@ -15,8 +15,7 @@ HEADS = [  # (file, options): None is the built-in default head
     ("misc/LeePerrySmith.obj", {}),
     ("misc/demosthenes-low-res.obj", {}),
     ("misc/goathead.obj", {}),
-    # the robot's front and back are alike to the orientation finder (see README): say it
-    ("misc/robot_head_neutral.obj", {"front": "+z"}),  # unwelded low-poly: every face its own vertices
+    ("misc/robot_head_neutral.obj", {}),  # unwelded low-poly: every face its own vertices
 ]
 IDS = ["default", "ict", "lps", "demosthenes", "goat", "robot"]
 
@@ -112,3 +111,17 @@ def test_explicit_bone_count_and_merge_tree(rigs):
     assert len(rig.skeleton) == 13 and rig.options["facial_bones"] == 11
     # every bone influences some vertex
     assert (rig.weights.max(axis=0) > 0.2).all()
+
+
+def test_merge_tree_can_be_cut_at_other_group_counts(rigs):
+    rig = rigs("misc/LeePerrySmith.obj", "medium")
+    seg = rig.segmentation
+    depth = seg.sample_depth
+    for n in (2, 3, 4, 6):
+        g = seg.groups(n)
+        assert len(np.unique(g)) == n
+        means = [depth[g == i].mean() for i in range(n)]
+        assert means == sorted(means, reverse=True)  # ordered front to back
+    side = rig.sidecar()
+    d = side["depth_merge_distances"]
+    assert d == sorted(d, reverse=True) and len(d) == 8
