@@ -1,0 +1,320 @@
+"""Dense correspondence by fitting the warped source surface to the target.
+
+Seed 000 ch. 5.6 (Jeong's global alignment) on top of seed 004 §3.1-3.3
+(TPS, then stick). The seeds' pipeline ``STK(TPS(source))`` is only as good as
+the TPS warp away from the landmarks, and the 27 face landmarks leave the sides
+and back of the head, the ears and the neck to extrapolation. Here the TPS warp
+is only the starting point; the source vertices ``x`` are then moved by
+repeated linear least squares (seed 000 eq. 5.4)::
+
+    E(x) = sum_i w_i ||x_i - c_i||^2                         (distance, 5.2)
+         + lam * sum_(i,j) ||(x_i - x_j) - s R_ij (v_i - v_j)||^2   (shape)
+         + mu  * sum_(b in boundary) ||x_b - c_b||^2         (binding, 5.6)
+         + nu  * sum_l ||B_l x - q_l||^2                      (constraints, 5.7)
+
+- ``c_i``: closest point of the target to ``x_i`` (point-to-plane at the
+  nearest target vertex during the iterations), dropped (``c_i = x_i``) when
+  the normals differ by more than ``max_angle`` or the distance is an outlier;
+- the shape term keeps every source edge ``v_i - v_j`` at its source length
+  times the landmark scale ``s``, turned by the rotation ``R_ij`` of the local
+  normal. It is seed 000's smoothness term (a vertex near its neighbours'
+  centroid) made relative to the source's own differential coordinates: it
+  is the uniform graph Laplacian, and with ``R = I, s = 1`` its minimum is the
+  source itself. We tried the bi-Laplacian form ``||L x - L x_tps||^2`` too:
+  less accurate and its LU factor is 3x larger (see benchmarks/correspondence.py);
+- the binding term pulls mesh boundary vertices (neck cut, eye and mouth
+  openings) to the target's boundary of the same part: goes beyond the seeds,
+  it is the only cue for where the neck ends;
+- the constraint term holds the source landmarks (barycentric rows ``B``) on
+  the target landmarks ``q``.
+
+``lam`` decreases over stages (stiff, coarse fit first); in each stage the
+normal matrix ``W + lam D^T D + mu W_b + nu B^T B`` is constant (rejected
+matches are held in place rather than given zero weight) and factorised once
+with ``scipy.sparse.linalg.splu``. A final exact stick
+(:func:`autobones.stick.stick`) puts every vertex on the target surface.
+
+Multi-part meshes (ICT: skin, eyeballs, teeth, gums, mouth socket, ... 56
+parts): the parts are the connected components of each mesh. After the TPS
+warp every source part votes, by the target part of its vertices' nearest
+compatible (normal within ``max_angle``) target vertices, and if one target
+part has at least half of the votes the source part is matched only to it,
+in the iterations and in the final stick. So an eyelid vertex cannot land on
+the eyeball behind it; a target scan with one part receives everything.
+"""
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import splu
+from scipy.spatial import cKDTree
+
+from .errors import AutobonesError
+from .stick import _check, closest_points, stick, vertex_normals
+from .tps import ThinPlateSpline, _as_points, landmark_arrays
+
+log = logging.getLogger(__name__)
+
+
+def mesh_edges(F):
+    """Unique undirected edges ``(e, 2)`` int64 of triangles ``F``, ``i < j``."""
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    E.sort(axis=1)
+    return np.unique(E, axis=0)
+
+
+def mesh_parts(n, F):
+    """Connected component label ``(n,)`` of each vertex (vertices in no face get their own)."""
+    E = mesh_edges(F)
+    A = sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
+    return connected_components(A, directed=False)[1]
+
+
+def boundary_vertices(n, F):
+    """Boolean ``(n,)``: vertex lies on an edge used by exactly one triangle."""
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    E.sort(axis=1)
+    key = E[:, 0] * n + E[:, 1]
+    u, count = np.unique(key, return_counts=True)
+    b = u[count == 1]
+    out = np.zeros(n, dtype=bool)
+    out[b // n] = True
+    out[b % n] = True
+    return out
+
+
+def _rotate(a, b, v):
+    """Rotate rows of ``v`` by the smallest rotation taking unit ``a`` to unit ``b``."""
+    k = np.cross(a, b)
+    s = np.linalg.norm(k, axis=1, keepdims=True)
+    c = np.einsum("ij,ij->i", a, b)[:, None]
+    k = k / np.maximum(s, 1e-12)
+    return v * c + np.cross(k, v) * s + k * np.einsum("ij,ij->i", k, v)[:, None] * (1.0 - c)
+
+
+class _PartTrees:
+    """Nearest target vertex per source vertex, restricted to a part when one is assigned."""
+
+    def __init__(self, V, mask, part):
+        self.V = V
+        self.trees = {}
+        idx = np.flatnonzero(mask)
+        self.all = (idx, cKDTree(V[idx])) if len(idx) else None
+        for g in np.unique(part[mask]):
+            i = idx[part[idx] == g]
+            self.trees[g] = (i, cKDTree(V[i]))
+
+    def query(self, X, labels):
+        out = np.empty(len(X), dtype=np.int64)
+        groups = [(g, np.flatnonzero(labels == g)) for g in np.unique(labels)]
+        for g, pi in groups:
+            idx, tree = self.trees.get(g, self.all)
+            out[pi] = idx[tree.query(X[pi], workers=-1)[1]]
+        return out
+
+
+def _part_map(src_part, tgt_part, nearest, agree):
+    """Source part -> target part holding >= half of its compatible nearest vertices, else -1."""
+    labels = np.full(src_part.max() + 1, -1, dtype=np.int64)
+    ok = agree
+    pairs = np.stack([src_part[ok], tgt_part[nearest[ok]]], axis=1)
+    if len(pairs) == 0:
+        return labels
+    u, count = np.unique(pairs, axis=0, return_counts=True)
+    size = np.bincount(src_part, minlength=len(labels))
+    order = np.argsort(-count, kind="stable")
+    for (s, t), c in zip(u[order], count[order]):
+        if labels[s] < 0 and c >= 0.5 * size[s]:
+            labels[s] = t
+    return labels
+
+
+def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
+                landmark_weight=1.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="source", timings=None):
+    """Deform the source surface onto the target (TPS, then staged least squares).
+
+    Parameters
+    ----------
+    V_src : (n, 3) float
+        Source vertices, source frame and units.
+    F_src : (m, 3) int
+        Source triangles.
+    V_tgt : (n_t, 3) float
+        Target vertices, target frame and units.
+    F_tgt : (m_t, 3) int
+        Target triangles.
+    lm_src, lm_tgt : dict of str -> (3,) float, or (k, 3) float
+        Landmarks on the source and on the target, each in its mesh's frame
+        (dicts are paired by name; arrays row by row). At least 4, not
+        coplanar; 10 or more well spread recommended.
+    stages : sequence of float
+        Shape-term weights ``lam``, stiff to loose; one factorisation each.
+    iterations : int
+        Closest-point updates per stage.
+    landmark_weight, boundary_weight : float
+        ``nu`` and ``mu`` relative to a data weight of 1 per vertex.
+    max_angle : float
+        Degrees; matches whose normals differ more are rejected.
+    restrict_parts : bool
+        Match each source part only to its voted target part (see module doc).
+    exact : bool
+        Exact closest points (libigl AABB) in every iteration instead of
+        point-to-plane at the nearest target vertex; 2x slower, no more
+        accurate on ICT.
+    edge_reference : {"source", "tps"}
+        Reference edge vectors of the shape term: the source's own edges
+        times the landmark scale (default; more accurate on ICT), or the
+        TPS-warped edges (keeps an anisotropic or sheared landmark warp).
+    timings : dict, optional
+        Filled with seconds per step: ``tps``, ``setup``, ``fit``.
+
+    Returns
+    -------
+    X : (n, 3) float64
+        Fitted source vertices in the target frame (near, not exactly on, the
+        target surface; :func:`dense_correspondence` sticks them).
+    labels : (n,) int64
+        Target part each source vertex is restricted to (``-1``: any), for
+        ``face_labels`` of the target faces given by ``mesh_parts(len(V_tgt), F_tgt)[F_tgt[:, 0]]``.
+
+    Raises
+    ------
+    AutobonesError
+        Bad meshes or landmarks (see :class:`autobones.tps.ThinPlateSpline`).
+    """
+    t0 = time.perf_counter()
+    V_src, F_src = _check(V_src, F_src, "source mesh")
+    V_tgt, F_tgt = _check(V_tgt, F_tgt, "target mesh")
+    if isinstance(lm_src, dict) or isinstance(lm_tgt, dict):
+        if not (isinstance(lm_src, dict) and isinstance(lm_tgt, dict)):
+            raise AutobonesError("give both landmark sets as dicts {name: [x, y, z]} or both as (k, 3) arrays")
+        _, P, Q = landmark_arrays(lm_src, lm_tgt)
+    else:
+        P, Q = _as_points(lm_src, "source landmarks"), _as_points(lm_tgt, "target landmarks")
+    if not len(stages) or min(stages) <= 0 or iterations < 1:
+        raise AutobonesError("stages must be positive shape weights and iterations >= 1")
+    if edge_reference not in ("source", "tps"):
+        raise AutobonesError(f"edge_reference must be 'source' or 'tps', got {edge_reference!r}")
+    n = len(V_src)
+    tps = ThinPlateSpline().fit(P, Q)
+    X = tps.transform(V_src)
+    scale = abs(np.linalg.det(tps.affine_[1:])) ** (1.0 / 3.0)
+    t1 = time.perf_counter()
+
+    # --- setup: edges, parts, boundary, landmark rows, nearest-vertex trees
+    E = mesh_edges(F_src)
+    m = len(E)
+    D = sp.csr_matrix((np.r_[np.ones(m), -np.ones(m)], (np.r_[np.arange(m), np.arange(m)], np.r_[E[:, 0], E[:, 1]])),
+                      shape=(m, n))
+    DtD = (D.T @ D).tocsc()
+    if edge_reference == "tps":
+        N_src = vertex_normals(X, F_src)
+        edge_src = X[E[:, 0]] - X[E[:, 1]]
+    else:
+        N_src = vertex_normals(V_src, F_src)
+        edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]])
+    n_edge_src = N_src[E[:, 0]] + N_src[E[:, 1]]
+    n_edge_src /= np.maximum(np.linalg.norm(n_edge_src, axis=1, keepdims=True), 1e-12)
+    in_face = np.zeros(n, dtype=bool)
+    in_face[F_src.ravel()] = True
+
+    _, lface, lbary, _ = closest_points(P, V_src, F_src)
+    B = sp.csr_matrix((lbary.ravel(), (np.repeat(np.arange(len(P)), 3), F_src[lface].ravel())), shape=(len(P), n))
+
+    nt = len(V_tgt)
+    N_tgt = vertex_normals(V_tgt, F_tgt)
+    tgt_in_face = np.zeros(nt, dtype=bool)
+    tgt_in_face[F_tgt.ravel()] = True
+    tgt_part = mesh_parts(nt, F_tgt)
+    trees = _PartTrees(V_tgt, tgt_in_face, tgt_part)
+    cos_max = np.cos(np.radians(max_angle))
+    face_labels = tgt_part[F_tgt[:, 0]]
+    FN_tgt = np.cross(V_tgt[F_tgt[:, 1]] - V_tgt[F_tgt[:, 0]], V_tgt[F_tgt[:, 2]] - V_tgt[F_tgt[:, 0]])
+    FN_tgt /= np.maximum(np.linalg.norm(FN_tgt, axis=1, keepdims=True), 1e-300)
+
+    if restrict_parts:
+        src_part = mesh_parts(n, F_src)
+        N = vertex_normals(X, F_src)
+        near = trees.query(X, np.full(n, -1))
+        agree = (np.einsum("ij,ij->i", N, N_tgt[near]) >= cos_max) & in_face
+        labels = _part_map(src_part, tgt_part, near, agree)[src_part]
+    else:
+        labels = np.full(n, -1, dtype=np.int64)
+
+    bnd_src = boundary_vertices(n, F_src) & (boundary_weight > 0)
+    bnd_tgt = boundary_vertices(nt, F_tgt)
+    btrees = _PartTrees(V_tgt, bnd_tgt, tgt_part) if bnd_src.any() and bnd_tgt.any() else None
+    bidx = np.flatnonzero(bnd_src) if btrees is not None else np.zeros(0, dtype=np.int64)
+
+    w = in_face.astype(np.float64)
+    w[bidx] = boundary_weight
+    w[~in_face] = 1e-6        # loose vertices: held where the TPS put them
+    W = sp.diags(w)
+    BtB = landmark_weight * (B.T @ B)
+    BtQ = landmark_weight * (B.T @ Q)
+    t2 = time.perf_counter()
+
+    # --- staged least squares
+    for lam in stages:
+        lu = splu((W + lam * DtD + BtB).tocsc(), permc_spec="COLAMD")
+        for _ in range(iterations):
+            N = vertex_normals(X, F_src)
+            if exact:
+                C, fc, _, _ = closest_points(X, V_tgt, F_tgt, labels, face_labels)
+                nj = FN_tgt[fc]
+            else:
+                j = trees.query(X, labels)
+                nj = N_tgt[j]
+                C = X - np.einsum("ij,ij->i", X - V_tgt[j], nj)[:, None] * nj      # point-to-plane
+            dist = np.linalg.norm(C - X, axis=1)
+            bad = (np.einsum("ij,ij->i", N, nj) < cos_max) | (dist > 5.0 * np.median(dist[in_face]) + 1e-12)
+            C[bad] = X[bad]
+            if len(bidx):
+                C[bidx] = V_tgt[btrees.query(X[bidx], labels[bidx])]
+            C[~in_face] = X[~in_face]
+            n_edge = N[E[:, 0]] + N[E[:, 1]]
+            n_edge /= np.maximum(np.linalg.norm(n_edge, axis=1, keepdims=True), 1e-12)
+            rhs = w[:, None] * C + lam * (D.T @ _rotate(n_edge_src, n_edge, edge_src)) + BtQ
+            X = lu.solve(rhs)
+    t3 = time.perf_counter()
+    if timings is not None:
+        timings.update(tps=t1 - t0, setup=t2 - t1, fit=t3 - t2)
+    log.debug("fit_surface: tps %.3fs setup %.3fs fit %.3fs", t1 - t0, t2 - t1, t3 - t2)
+    return X, labels
+
+
+def dense_correspondence(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, timings=None, **kwargs):
+    """Source vertex -> point on the target surface: :func:`fit_surface` then a final stick.
+
+    Parameters
+    ----------
+    V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt
+        As in :func:`fit_surface` (each mesh in its own frame and units).
+    timings : dict, optional
+        Filled with seconds per step: ``tps``, ``setup``, ``fit``, ``stick``.
+    **kwargs
+        Passed to :func:`fit_surface`.
+
+    Returns
+    -------
+    P : (n, 3) float64
+        Corresponding points on the target surface (target units).
+    face : (n,) int64
+        Target face of each point.
+    bary : (n, 3) float64
+        Barycentric coordinates in that face.
+    reliable : (n,) bool
+        False where :func:`autobones.stick.stick` detected a fold.
+    """
+    X, labels = fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, timings=timings, **kwargs)
+    t0 = time.perf_counter()
+    F_tgt = np.asarray(F_tgt, dtype=np.int64)
+    face_labels = mesh_parts(len(V_tgt), F_tgt)[F_tgt[:, 0]] if (labels >= 0).any() else None
+    out = stick(X, F_src, V_tgt, F_tgt, labels=labels if face_labels is not None else None, face_labels=face_labels)
+    if timings is not None:
+        timings["stick"] = time.perf_counter() - t0
+    return out

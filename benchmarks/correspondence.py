@@ -1,0 +1,132 @@
+"""Accuracy and time of dense correspondence on the ICT same-topology heads.
+
+Run by hand, not by the tests::
+
+    python benchmarks/correspondence.py            # all 12 ordered pairs
+    python benchmarks/correspondence.py --quick    # 2 pairs
+
+Goes beyond the seeds: it scores seed 004's TPS and TPS+STK (§3.1, §3.3) and
+autobones.fit (seed 000 ch. 5 global alignment) against ground truth.
+
+Data: ``../shared/data/ict/{generic_neutral_mesh,identity000,identity001,
+identity002}.obj`` (26,719 vertices, 56 parts, one vertex list), each with a
+``.landmarks.json`` of the 27 contract landmarks. Vertex i of one head is the
+true partner of vertex i of another. For every ordered pair (source, target)
+the source is warped onto the target with the landmarks of both, and
+
+    error_i = ||point_i - target vertex i|| / ||exocanthion_l - exocanthion_r||
+
+(target's outer-eye-corner distance), in percent. "skin" is the largest
+connected component of the mesh (14,062 vertices: face, scalp, ears, neck);
+"all" adds eyeballs, teeth, gums, mouth socket, eyelashes and the other
+small parts.
+
+Landmark sets: all 27, and 10 well spread ones (SUBSET10 below): outer brows,
+outer eye corners, nasion, nose tip, subnasale, mouth corners, menton.
+
+Methods: ``TPS`` (warped vertex itself), ``TPS+STK`` (closest point of the
+target, :func:`autobones.stick.stick`), ``fit`` (:func:`autobones.fit.dense_correspondence`).
+Times are per call, median over the pairs, on this machine.
+
+Result of the first run (12 pairs, shared 2-core machine under load, so the
+times are wall-clock upper bounds; user CPU was ~1/3 of wall time)::
+
+    | landmarks | method  | mean all % | p95 all % | mean skin % | p95 skin % |
+    | 27        | TPS     | 1.36       | 5.74      | 1.90        | 7.08       |
+    | 27        | TPS+STK | 1.07       | 4.29      | 1.43        | 5.32       |
+    | 27        | fit     | 0.78       | 3.34      | 1.29        | 4.12       |
+    | 10        | TPS     | 2.10       | 8.22      | 2.83        | 10.72      |
+    | 10        | TPS+STK | 1.73       | 6.75      | 2.24        | 8.35       |
+    | 10        | fit     | 1.12       | 4.72      | 1.78        | 5.91       |
+
+    median s (27 lm): TPS 0.11, stick 0.36; fit total 3.8 = tps 0.11 +
+    setup 0.90 + least squares 2.25 + stick 0.37
+
+The targets (mean <= 1 %, p95 <= 3 %, <= 1 s) are met for the mean over all
+vertices only; the remaining error is tangential, on the sides and back of the
+head, ears and neck, where no landmark is.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from autobones.fit import dense_correspondence, mesh_parts
+from autobones.io.mesh import load_mesh
+from autobones.stick import stick
+from autobones.tps import ThinPlateSpline, landmark_arrays
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+HEADS = ["generic_neutral_mesh", "identity000", "identity001", "identity002"]
+SUBSET10 = ["brow_outer_l", "brow_outer_r", "exocanthion_l", "exocanthion_r", "nasion", "pronasale",
+            "subnasale", "cheilion_l", "cheilion_r", "menton"]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="two pairs only")
+    args = ap.parse_args(argv)
+    mesh = {h: load_mesh(DATA / "ict" / f"{h}.obj") for h in HEADS}
+    lms = {h: json.loads((DATA / "ict" / f"{h}.landmarks.json").read_text())["landmarks"] for h in HEADS}
+    F = mesh[HEADS[0]][1]
+    part = mesh_parts(len(mesh[HEADS[0]][0]), F)
+    skin = part == np.argmax(np.bincount(part))
+    pairs = [(s, t) for s in HEADS for t in HEADS if s != t]
+    if args.quick:
+        pairs = [pairs[0], pairs[-1]]
+    print(f"# ICT dense correspondence, {len(pairs)} ordered pairs, {len(F)} triangles, "
+          f"{len(skin)} vertices ({skin.sum()} skin); {platform.processor() or platform.machine()}")
+    rows = []
+    for lmset in ("27", "10"):
+        errs = {m: ([], []) for m in ("TPS", "TPS+STK", "fit")}
+        times = {k: [] for k in ("tps", "stick", "fit_total", "setup", "fit", "fit_stick")}
+        for s, t in pairs:
+            Ls, Lt = lms[s], lms[t]
+            if lmset == "10":
+                Ls = {k: Ls[k] for k in SUBSET10}
+                Lt = {k: Lt[k] for k in SUBSET10}
+            Vs, Vt = mesh[s][0], mesh[t][0]
+            eye = np.linalg.norm(np.subtract(lms[t]["exocanthion_l"], lms[t]["exocanthion_r"]))
+            _, P, Q = landmark_arrays(Ls, Lt)
+            t0 = time.perf_counter()
+            X = ThinPlateSpline().fit(P, Q).transform(Vs)
+            t1 = time.perf_counter()
+            S = stick(X, F, Vt, F)[0]
+            t2 = time.perf_counter()
+            tm = {}
+            R = dense_correspondence(Vs, F, Vt, F, Ls, Lt, timings=tm)[0]
+            t3 = time.perf_counter()
+            times["tps"].append(t1 - t0)
+            times["stick"].append(t2 - t1)
+            times["fit_total"].append(t3 - t2)
+            for k in ("setup", "fit"):
+                times[k].append(tm[k])
+            times["fit_stick"].append(tm["stick"])
+            for m, Y in (("TPS", X), ("TPS+STK", S), ("fit", R)):
+                e = 100 * np.linalg.norm(Y - Vt, axis=1) / eye
+                errs[m][0].append(e)
+                errs[m][1].append(e[skin])
+            print(f"  {lmset} lm {s} -> {t}: TPS+STK {np.mean(errs['TPS+STK'][0][-1]):.2f}%  "
+                  f"fit {np.mean(errs['fit'][0][-1]):.2f}%  ({t3 - t2:.2f} s)", flush=True)
+        for m, (a, sk) in errs.items():
+            a, sk = np.concatenate(a), np.concatenate(sk)
+            rows.append((lmset, m, a.mean(), np.percentile(a, 95), sk.mean(), np.percentile(sk, 95)))
+        med = {k: float(np.median(v)) for k, v in times.items()}
+        print(f"  times ({lmset} landmarks, median s): TPS {med['tps']:.3f}, TPS+STK stick {med['stick']:.3f}; "
+              f"fit total {med['fit_total']:.3f} = tps {med['tps']:.3f} + setup {med['setup']:.3f} "
+              f"+ least squares {med['fit']:.3f} + stick {med['fit_stick']:.3f}")
+    print("\n| landmarks | method | mean all % | p95 all % | mean skin % | p95 skin % |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]} | {r[2]:.2f} | {r[3]:.2f} | {r[4]:.2f} | {r[5]:.2f} |")
+    print("\n(error per vertex / target outer-eye-corner distance, pooled over all pairs; "
+          "targets: mean <= 1.0 %, p95 <= 3 % with 27 landmarks)")
+
+
+if __name__ == "__main__":
+    main()
