@@ -58,10 +58,37 @@ NECK_CUT_Y = -0.085          # flat bottom of the neck (m)
 GRID_STEP = 0.0008           # marching-cubes sampling step (m)
 TARGET_TRIANGLES = 8000      # full-head triangle budget
 
-# Key anatomical points in the output frame (metres).  "_l" = subject's left
-# (+x).  Midline points have x = 0; the right-side points are the mirror
-# images (x -> -x).  Filled in from measurements of the built mesh.
-ANATOMY: dict[str, tuple[float, float, float]] = {}
+# Key anatomical points in the output frame (metres), measured on the built
+# mesh with ``--measure`` (surface points snapped to the mesh; eye_centre is
+# the centre of the closed-lid/eyeball bulge, inside the head).  "_l" = the
+# subject's left (+x); the "_r" entries are added below as exact mirror images
+# (x -> -x).  Midline points have x = 0.  Re-run --measure after changing the
+# shape and paste the table here.
+ANATOMY: dict[str, tuple[float, float, float]] = {
+    "pronasale": (0.0000, 0.0829, 0.1075),
+    "glabella": (0.0000, 0.1367, 0.0946),
+    "nasion": (0.0000, 0.1197, 0.0896),
+    "subnasale": (0.0000, 0.0691, 0.0908),
+    "stomion": (0.0000, 0.0479, 0.0893),
+    "labrale_superius": (0.0000, 0.0535, 0.0928),
+    "labrale_inferius": (0.0000, 0.0413, 0.0914),
+    "pogonion": (0.0000, 0.0150, 0.0837),
+    "menton": (0.0000, 0.0004, 0.0700),
+    "vertex": (0.0000, 0.2260, -0.0020),
+    "opisthocranion": (0.0000, 0.1430, -0.0964),
+    "exocanthion_l": (0.0464, 0.1142, 0.0631),
+    "endocanthion_l": (0.0166, 0.1118, 0.0688),
+    "eye_centre_l": (0.0315, 0.1130, 0.0575),
+    "cheilion_l": (0.0264, 0.0484, 0.0718),
+    "alare_l": (0.0211, 0.0720, 0.0839),
+    "zygion_l": (0.0690, 0.1000, 0.0150),
+    "gonion_l": (0.0551, 0.0198, -0.0103),
+    "tragion_l": (0.0710, 0.1061, -0.0031),
+    "superaurale_l": (0.0768, 0.1329, -0.0246),
+    "subaurale_l": (0.0680, 0.0718, -0.0078),
+}
+ANATOMY.update({k[:-2] + "_r": (-v[0] + 0.0, v[1], v[2])
+                for k, v in list(ANATOMY.items()) if k.endswith("_l")})
 
 
 # ---------------------------------------------------------------------------
@@ -267,8 +294,8 @@ def head_field(P):
     f = smin(f, ellipsoid(p, (0.0420, 0.0950, 0.0480), (0.0160, 0.0130, 0.0160)), 0.020)
     # --- lower face: muzzle, jaw, chin
     f = smin(f, ellipsoid(p, (0.0, 0.0520, 0.0420), (0.0400, 0.0360, 0.0440)), 0.012)
-    jaw = capsule(p, (0.0520, 0.0880, -0.0080), (0.0430, 0.0330, -0.0030), 0.0090, 0.0100)
-    jaw = smin(jaw, capsule(p, (0.0430, 0.0330, -0.0030), (0.0180, 0.0090, 0.0620),
+    jaw = capsule(p, (0.0510, 0.0880, -0.0080), (0.0405, 0.0330, -0.0030), 0.0090, 0.0100)
+    jaw = smin(jaw, capsule(p, (0.0405, 0.0330, -0.0030), (0.0180, 0.0090, 0.0620),
                             0.0100, 0.0100), 0.006)
     f = smin(f, jaw, 0.018)
     f = smin(f, ellipsoid(p, (0.0, 0.0300, 0.0300), (0.0480, 0.0300, 0.0450)), 0.012)
@@ -296,14 +323,14 @@ def head_field(P):
     f = smax(f, -crease, 0.0015)
 
     # --- nose
-    nose = capsule(p, (0.0, 0.1190, 0.0795), (0.0, 0.0890, 0.0985), 0.0055, 0.0075)
-    nose = smin(nose, ellipsoid(p, (0.0, 0.0960, 0.0800), (0.0120, 0.0240, 0.0140),
+    nose = capsule(p, (0.0, 0.1190, 0.0795), (0.0, 0.0850, 0.0985), 0.0055, 0.0075)
+    nose = smin(nose, ellipsoid(p, (0.0, 0.0935, 0.0800), (0.0120, 0.0265, 0.0140),
                                 rot_x(34)), 0.005)
-    nose = smin(nose, ellipsoid(p, (0.0, 0.0858, 0.0985), (0.0085, 0.0080, 0.0085)), 0.005)
-    nose = smin(nose, capsule(p, (0.0130, 0.0790, 0.0815), (0.0075, 0.0800, 0.0930),
+    nose = smin(nose, ellipsoid(p, (0.0, 0.0818, 0.0985), (0.0085, 0.0080, 0.0085)), 0.005)
+    nose = smin(nose, capsule(p, (0.0130, 0.0750, 0.0815), (0.0075, 0.0760, 0.0930),
                               0.0052, 0.0040), 0.006)
     f = smin(f, nose, 0.004)
-    nostril = ellipsoid(p, (0.0068, 0.0745, 0.0925), (0.0038, 0.0026, 0.0062), rot_y(18))
+    nostril = ellipsoid(p, (0.0068, 0.0705, 0.0925), (0.0038, 0.0026, 0.0062), rot_y(18))
     f = smax(f, -nostril, 0.0015)
 
     # --- lips and mouth line (bent along the dental arch)
@@ -311,20 +338,22 @@ def head_field(P):
         return -0.020 * (xx / 0.027) ** 2
     pa = p.copy()
     pa[:, 2] = z - arch(x)
-    upper = ellipsoid(pa, (0.0, 0.0530, 0.0865), (0.0270, 0.0060, 0.0065), rot_x(-12))
+    upper = ellipsoid(pa, (0.0, 0.0530, 0.0865), (0.0280, 0.0060, 0.0065), rot_x(-12))
     lower = ellipsoid(pa, (0.0, 0.0415, 0.0845), (0.0235, 0.0065, 0.0070), rot_x(15))
+    # skin of the upper lip (subnasale -> vermilion), fuller than the muzzle
+    f = smin(f, ellipsoid(p, (0.0, 0.0615, 0.0785), (0.0230, 0.0120, 0.0100)), 0.018)
     f = smin(f, smin(upper, lower, 0.002), 0.004)
-    slit = ellipsoid(pa, (0.0, 0.0480, 0.0925), (0.0275, 0.0011, 0.0055))
+    slit = ellipsoid(pa, (0.0, 0.0480, 0.0925), (0.0295, 0.0011, 0.0055))
     f = smax(f, -slit, 0.0010)
-    phil = ellipsoid(p, (0.0, 0.0650, 0.0925), (0.0035, 0.0080, 0.0025))
+    phil = ellipsoid(p, (0.0, 0.0625, 0.0915), (0.0035, 0.0070, 0.0025))
     f = smax(f, -phil, 0.0020)
 
     # --- ears
     ear = local(p, (0.040, 0.060, -0.065), (0.110, 0.150, 0.020), _ear)
     f = smin(f, ear, 0.0025)
 
-    # --- flat neck cut
-    f = np.maximum(f, NECK_CUT_Y - y)
+    # --- flat neck cut (small fillet at the rim)
+    f = smax(f, NECK_CUT_Y - y, 0.004)
     return f
 
 
@@ -657,6 +686,8 @@ def render(V, F, path, size=520, span=0.36, center=(0.0, 0.075), angles=(0.0, 35
 
     def vnormals(V, F):
         fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        cap = fn[:, 1] < -0.95 * np.linalg.norm(fn, axis=1)   # keep the cap rim sharp
+        fn = fn * ~cap[:, None]
         vn = np.zeros_like(V)
         for k in range(3):
             np.add.at(vn, F[:, k], fn)
@@ -704,9 +735,9 @@ def render(V, F, path, size=520, span=0.36, center=(0.0, 0.075), angles=(0.0, 35
             img[iy[upd], ix[upd]] = sh[m][upd]
         imgs.append(img)
     fig, axs = plt.subplots(1, len(imgs), figsize=(len(imgs) * size / 100, size / 100), dpi=100)
-    for a, im, t in zip(axs, imgs, ("front", "3/4", "side")):
+    for a, im, t in zip(np.atleast_1d(axs), imgs, angles):
         a.imshow(im, cmap="gray", vmin=0, vmax=1)
-        a.set_title(t)
+        a.set_title({0.0: "front", 90.0: "side"}.get(t, f"{t:g} deg"))
         a.axis("off")
     fig.tight_layout()
     fig.savefig(path)
@@ -785,6 +816,113 @@ def _seg_tri(p0, p1, T):
     return ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t >= 0) & (t <= 1)
 
 
+def _ray_hit(o, d, tmax=0.25, n=2500):
+    """First point where the ray o + t d (t in [0, tmax]) enters the head."""
+    o = np.asarray(o, float)
+    d = np.asarray(d, float)
+    d = d / np.linalg.norm(d)
+    t = np.linspace(0.0, tmax, n)
+    f = head_field(o + t[:, None] * d)
+    inside = np.flatnonzero(f < 0)
+    if len(inside) == 0 or inside[0] == 0:
+        return None
+    lo, hi = t[inside[0] - 1], t[inside[0]]
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        if head_field((o + mid * d)[None])[0] < 0:
+            hi = mid
+        else:
+            lo = mid
+    return o + 0.5 * (lo + hi) * d
+
+
+def _ear_to_world(u, v, w):
+    E = np.array([0.0705, 0.1030, -0.0170])
+    th, ph = np.radians(22.0), np.radians(16.0)
+    n = np.array([np.cos(th), 0.0, np.sin(th)])
+    fwd = np.array([-np.sin(th), 0.0, np.cos(th)])
+    upv = np.array([0.0, 1.0, 0.0])
+    up = np.cos(ph) * upv - np.sin(ph) * fwd
+    fw = np.sin(ph) * upv + np.cos(ph) * fwd
+    return E + u * up + v * fw + w * n
+
+
+def measure_anatomy(V=None, F=None):
+    """Locate key anatomical points on the implicit surface (and, if a mesh
+    is given, snap them to the closest point of the mesh)."""
+    A = {}
+    ys = np.arange(-0.003, 0.1605, 0.00025)
+    front = np.array([_ray_hit((0.0, y, 0.15), (0, 0, -1))[2] for y in ys])
+
+    def prof_pt(lo, hi, mode):
+        m = (ys >= lo) & (ys <= hi)
+        i = np.flatnonzero(m)[(np.argmax if mode == "max" else np.argmin)(front[m])]
+        return np.array([0.0, ys[i], front[i]])
+    A["pronasale"] = prof_pt(0.07, 0.11, "max")
+    A["glabella"] = prof_pt(0.125, 0.150, "max")
+    A["nasion"] = prof_pt(0.105, A["glabella"][1], "min")
+    # subnasale: top of the upper-lip skin, where the columella leaves it
+    lip = prof_pt(0.060, A["pronasale"][1], "min")
+    m = (ys >= 0.060) & (ys <= A["pronasale"][1]) & (front < lip[2] + 0.0015)
+    i = np.flatnonzero(m).max()
+    A["subnasale"] = np.array([0.0, ys[i], front[i]])
+    A["stomion"] = prof_pt(0.044, 0.052, "min")
+    A["labrale_superius"] = prof_pt(A["stomion"][1], A["subnasale"][1], "max")
+    A["labrale_inferius"] = prof_pt(0.030, A["stomion"][1], "max")
+    A["pogonion"] = prof_pt(0.0, 0.030, "max")
+    # menton: lowest point of the chin in the mid-sagittal plane
+    hits = [_ray_hit((0.0, -0.04, z), (0, 1, 0)) for z in np.arange(0.060, 0.0801, 0.0005)]
+    A["menton"] = min(hits, key=lambda p: (p[1], -p[2]))
+    hits = [_ray_hit((0.0, 0.30, z), (0, -1, 0)) for z in np.arange(-0.04, 0.0401, 0.0005)]
+    A["vertex"] = max(hits, key=lambda p: p[1])
+    hits = [_ray_hit((0.0, y, -0.15), (0, 0, 1)) for y in np.arange(0.10, 0.2001, 0.0005)]
+    A["opisthocranion"] = min(hits, key=lambda p: p[2])
+    # eyes (closed): ends of the lid fissure
+    A["exocanthion_l"] = _ray_hit((_FISSURE[-1, 0], _FISSURE[-1, 1], 0.15), (0, 0, -1))
+    A["endocanthion_l"] = _ray_hit((_FISSURE[0, 0], _FISSURE[0, 1], 0.15), (0, 0, -1))
+    A["eye_centre_l"] = EYE_C.copy()
+    # mouth corner: lateral end of the mouth-line groove
+    best = None
+    for xx in np.arange(0.015, 0.0320, 0.00025):
+        zc = _ray_hit((xx, 0.0480, 0.15), (0, 0, -1))
+        za = _ray_hit((xx, 0.0440, 0.15), (0, 0, -1))
+        zb = _ray_hit((xx, 0.0520, 0.15), (0, 0, -1))
+        if 0.5 * (za[2] + zb[2]) - zc[2] > 0.0003:
+            best = zc
+    A["cheilion_l"] = best
+    # nose wing: most lateral point of the ala
+    hits = [_ray_hit((0.06, y, z), (-1, 0, 0)) for y in np.arange(0.072, 0.0861, 0.0005)
+            for z in np.arange(0.084, 0.0961, 0.0005)]
+    hits = [h for h in hits if h is not None and h[0] < 0.03]
+    A["alare_l"] = max(hits, key=lambda p: p[0])
+    # cheekbone: most lateral point of the zygomatic arch (in front of the ear)
+    hits = [_ray_hit((0.12, 0.100, z), (-1, 0, 0)) for z in np.arange(0.015, 0.0451, 0.0005)]
+    A["zygion_l"] = max(hits, key=lambda p: p[0])
+    # jaw angle
+    c = np.array([0.0405, 0.0330, -0.0030])
+    dirn = np.array([1.0, -0.9, -0.5])
+    dirn /= np.linalg.norm(dirn)
+    A["gonion_l"] = _ray_hit(c + 0.08 * dirn, -dirn)
+    # ear: tragion (notch above the tragus), top and bottom of the ear
+    tp = _ear_to_world(-0.0010, 0.0140, 0.0030)
+    A["tragion_l"] = _ray_hit((0.12, tp[1], tp[2]), (-1, 0, 0))
+    top = _ear_to_world(0.0310, -0.0010, 0.0030)
+    A["superaurale_l"] = _ray_hit((top[0], 0.25, top[2]), (0, -1, 0))
+    bot = _ear_to_world(-0.0310, 0.0010, 0.0010)
+    A["subaurale_l"] = _ray_hit((bot[0], 0.0, bot[2]), (0, 1, 0))
+    if V is not None:
+        import igl
+        keys = [k for k in A if k != "eye_centre_l"]
+        P = np.array([A[k] for k in keys])
+        _, _, C = igl.point_mesh_squared_distance(P, V, F)
+        for k, c_ in zip(keys, C):
+            A[k] = c_
+    for k in A:
+        if not k.endswith("_l"):
+            A[k] = np.array([0.0, A[k][1], A[k][2]])
+    return {k: tuple(round(float(t), 4) + 0.0 for t in A[k]) for k in A}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=OUT_OBJ)
@@ -792,6 +930,8 @@ def main(argv=None):
     ap.add_argument("--check", action="store_true", help="print mesh statistics")
     ap.add_argument("--step", type=float, default=GRID_STEP)
     ap.add_argument("--target", type=int, default=TARGET_TRIANGLES)
+    ap.add_argument("--measure", action="store_true",
+                    help="print the ANATOMY table measured on the built mesh")
     a = ap.parse_args(argv)
     V, F = build(a.step, a.target)
     write_obj(a.out, V, F)
@@ -802,6 +942,11 @@ def main(argv=None):
         print("self_intersections:", self_intersections(V, F))
     if a.render:
         render(V, F, a.render)
+    if a.measure:
+        print("ANATOMY_LEFT_AND_MIDLINE = {")
+        for k, v in measure_anatomy(V, F).items():
+            print(f'    "{k}": ({v[0]:.4f}, {v[1]:.4f}, {v[2]:.4f}),')
+        print("}")
 
 
 if __name__ == "__main__":
