@@ -29,8 +29,8 @@ Frame, units, origin
     Metres.  +Y up, +Z out of the face (the head looks along +Z), +X toward
     the subject's own LEFT ear.  Origin: x = 0 on the mid-sagittal (symmetry)
     plane, y = 0 at the height of menton (lowest point of the chin), z = 0 on
-    the coronal plane through the tragions (ear canals).  The neck is cut flat
-    at y = NECK_CUT_Y (= -0.085) and capped.
+    the coronal plane through the ear canals (tragion is at z = -0.003).
+    The neck is cut flat at y = NECK_CUT_Y (= -0.085) and capped.
 
     ``ANATOMY`` (below) gives the positions of key anatomical points in this
     frame; they are measured on the built surface (see ``--measure``).
@@ -39,8 +39,11 @@ Run
     python generic_rig/build_default_head.py            # writes default_head.obj
     python generic_rig/build_default_head.py --render gallery/default_head.png
     python generic_rig/build_default_head.py --check    # print mesh statistics
+    python generic_rig/build_default_head.py --measure  # print the ANATOMY table
+    (about 1.5 min; the output is byte-identical from run to run.)
 
-Build-time requirements: numpy, scipy, scikit-image, libigl (``igl``); matplotlib only for ``--render``.
+Build-time requirements: numpy, scipy, scikit-image, libigl (``igl``);
+matplotlib only for ``--render``.  Importing this module needs only numpy.
 """
 
 from __future__ import annotations
@@ -67,9 +70,9 @@ TARGET_TRIANGLES = 8000      # full-head triangle budget
 ANATOMY: dict[str, tuple[float, float, float]] = {
     "pronasale": (0.0000, 0.0829, 0.1075),
     "glabella": (0.0000, 0.1367, 0.0946),
-    "nasion": (0.0000, 0.1197, 0.0896),
+    "nasion": (0.0000, 0.1201, 0.0913),
     "subnasale": (0.0000, 0.0691, 0.0908),
-    "stomion": (0.0000, 0.0479, 0.0893),
+    "stomion": (0.0000, 0.0478, 0.0896),
     "labrale_superius": (0.0000, 0.0535, 0.0928),
     "labrale_inferius": (0.0000, 0.0413, 0.0914),
     "pogonion": (0.0000, 0.0150, 0.0837),
@@ -81,7 +84,7 @@ ANATOMY: dict[str, tuple[float, float, float]] = {
     "eye_centre_l": (0.0315, 0.1130, 0.0575),
     "cheilion_l": (0.0264, 0.0484, 0.0718),
     "alare_l": (0.0211, 0.0720, 0.0839),
-    "zygion_l": (0.0690, 0.1000, 0.0150),
+    "zygion_l": (0.0689, 0.1000, 0.0149),
     "gonion_l": (0.0551, 0.0198, -0.0103),
     "tragion_l": (0.0710, 0.1061, -0.0031),
     "superaurale_l": (0.0768, 0.1329, -0.0246),
@@ -553,10 +556,6 @@ def relax(V, F, refV, refF, iters=8, lam=0.5):
     # reference border polyline (2D in the y-z plane)
     rbe = boundary_edges(refF)
     ra, rb = refV[rbe[:, 0]][:, 1:], refV[rbe[:, 1]][:, 1:]
-    # interior adjacency (all edges) and border adjacency (border edges)
-    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    import scipy.sparse as sp
     for _ in range(iters):
         # area-weighted centroid of the one-ring faces (CVT-like)
         v0, v1, v2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
@@ -762,7 +761,7 @@ def check(V, F):
     # volume (outward orientation -> positive)
     v0, v1, v2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     vol = np.einsum("ij,ij->i", v0, np.cross(v1, v2)).sum() / 6
-    chi = len(V) - len(und) // 2 * 0 - len(np.unique(und, axis=0)) + len(F)
+    chi = len(V) - len(cnt) + len(F)
     stats = dict(
         vertices=len(V), triangles=len(F),
         every_edge_two_faces=bool((cnt == 2).all()),
@@ -912,7 +911,16 @@ def measure_anatomy(V=None, F=None):
     A["subaurale_l"] = _ray_hit((bot[0], 0.0, bot[2]), (0, 1, 0))
     if V is not None:
         import igl
-        keys = [k for k in A if k != "eye_centre_l"]
+        # midline points: closest point on the mesh's x = 0 seam polyline
+        e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+        e = e[(V[e[:, 0], 0] == 0.0) & (V[e[:, 1], 0] == 0.0)]
+        sa, sb = V[e[:, 0]], V[e[:, 1]]
+        for k in [k for k in A if not k.endswith("_l")]:
+            ab = sb - sa
+            t = np.clip(((A[k] - sa) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-30), 0, 1)
+            q = sa + t[:, None] * ab
+            A[k] = q[np.argmin(((q - A[k]) ** 2).sum(1))]
+        keys = [k for k in A if k.endswith("_l") and k != "eye_centre_l"]
         P = np.array([A[k] for k in keys])
         _, _, C = igl.point_mesh_squared_distance(P, V, F)
         for k, c_ in zip(keys, C):
