@@ -51,6 +51,9 @@ class Rig:
     segmentation : segment.HeadSegmentation or None
         The depth grouping with its full merge tree: ``rig.segmentation.groups(4)``
         cuts it at another group count (seed 003 §3.1).
+    fields : dict of str -> (n,) or (n, k) array
+        Attribute fields carried onto the vertices (``transfer``); saved in the npz
+        as ``field/<name>``.
     """
 
     vertices: np.ndarray
@@ -64,6 +67,7 @@ class Rig:
     timings: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
     segmentation: object = None
+    fields: dict = field(default_factory=dict)
 
     def sidecar(self):
         """The JSON sidecar as a dict."""
@@ -113,7 +117,8 @@ class Rig:
                 json.dump(self.sidecar(), fh, indent=1)
             with open(temps[2], "wb") as fh:
                 np.savez_compressed(fh, weights=self.weights.astype(np.float32),
-                                    bone_names=np.array(self.skeleton.names))
+                                    bone_names=np.array(self.skeleton.names),
+                                    **{f"field/{k}": v for k, v in self.fields.items()})
             for tmp, target in zip(temps, targets):
                 os.replace(tmp, target)
         except OSError as exc:

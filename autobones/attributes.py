@@ -1,0 +1,221 @@
+"""Carry per-vertex attribute fields from a source surface onto a target mesh.
+
+Seed 004 §3.5: once the generic surface is stuck onto the target (a dense
+correspondence), each target vertex takes the field at its closest point on
+the stuck generic surface, by barycentric interpolation; label fields take the
+label of the dominant vertex of that triangle.
+
+Beyond 004: where that match is unreliable (the target vertex is far from the
+stuck surface, its normal disagrees with it, or the generic vertex there was
+marked as folded) copying would spread garbage, so the field is filled in
+smoothly from the reliable neighbours instead: harmonic inpainting, the
+Laplace equation on the target mesh with the reliable values as boundary
+conditions (as in weight inpainting for skin transfer, Abdrashitov et al. 2023).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from .errors import AutobonesError
+from .weights import weld
+
+
+def sample_fields(V_src, F_src, P):
+    """Closest point of ``P`` on the source surface, as face and barycentric coordinates.
+
+    Parameters
+    ----------
+    V_src : (n, 3) float
+        Source vertices (e.g. the generic surface stuck onto the target).
+    F_src : (m, 3) int
+        Source triangles.
+    P : (k, 3) float
+        Query points (e.g. target vertices), same frame as ``V_src``.
+
+    Returns
+    -------
+    face : (k,) int
+    bary : (k, 3) float
+    distance : (k,) float
+    """
+    from .stick import closest_points
+
+    C, face, bary = closest_points(P, V_src, F_src)[:3]
+    return face, bary, np.linalg.norm(C - P, axis=1)
+
+
+def inpaint(V, F, values, known):
+    """Harmonic fill of ``values`` where ``known`` is False.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Mesh vertices.
+    F : (m, 3) int
+        Triangles (several parts and unwelded faces are fine: vertices are welded
+        by position first).
+    values : (n,) or (n, k) float
+        Field values; only the known rows are used.
+    known : (n,) bool
+        Rows to keep.
+
+    Returns
+    -------
+    (n,) or (n, k) float
+        ``values`` on known rows; elsewhere the solution of the Laplace equation
+        with the known rows fixed. A part with no known vertex takes the value of
+        the nearest known vertex.
+    """
+    import robust_laplacian
+
+    values = np.asarray(values, dtype=np.float64)
+    flat = values.ndim == 1
+    X = values[:, None] if flat else values.copy()
+    known = np.asarray(known, dtype=bool)
+    if known.all():
+        return values.copy()
+    if not known.any():
+        raise AutobonesError("no reliable correspondence at all: are the landmarks on the right heads?")
+    extent = np.ptp(V, axis=0).max()
+    Vw, Fw, index = weld(V, F, 1e-9 * extent)
+    # a welded vertex is known if any of its copies is
+    kw = np.zeros(len(Vw), dtype=bool)
+    kw[index[known]] = True
+    Xw = np.zeros((len(Vw), X.shape[1]))
+    Xw[index[known]] = X[known]
+    used = np.zeros(len(Vw), dtype=bool)
+    used[Fw.ravel()] = True
+    L, _ = robust_laplacian.mesh_laplacian(Vw[used], np.cumsum(used)[Fw] - 1) if len(Fw) else (None, None)
+    sub = np.flatnonzero(used)
+    unknown = sub[~kw[sub]]
+    if len(unknown) and L is not None:
+        pos = np.full(len(Vw), -1)
+        pos[sub] = np.arange(len(sub))
+        u, k = pos[unknown], pos[sub[kw[sub]]]
+        L = L.tocsr()
+        Luu, Luk = L[u][:, u], L[u][:, k]
+        # parts with no known vertex make Luu singular: pin them with a tiny diagonal,
+        # then give them the nearest known value below
+        reach = _reaches_known(L, u, k)
+        Luu = (Luu + sp.diags(np.where(reach, 0.0, 1.0))).tocsc()
+        rhs = -(Luk @ Xw[sub[kw[sub]]])
+        rhs[~reach] = 0.0
+        Xw[unknown] = splu(Luu).solve(np.ascontiguousarray(rhs))
+        kw[unknown[reach]] = True
+    if not kw.all():
+        from scipy.spatial import cKDTree
+
+        _, j = cKDTree(Vw[kw]).query(Vw[~kw])
+        Xw[~kw] = Xw[kw][j]
+    out = Xw[index]
+    out[known] = X[known]
+    return out[:, 0] if flat else out
+
+
+def _reaches_known(L, u, k):
+    """(len(u),) bool: unknown vertices connected to some known vertex."""
+    from scipy.sparse.csgraph import connected_components
+
+    _, comp = connected_components(L, directed=False)
+    good = np.zeros(comp.max() + 1, dtype=bool)
+    good[comp[k]] = True
+    return good[comp[u]]
+
+
+def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, max_distance=0.02,
+                    max_angle=60.0):
+    """Fields on the stuck source surface -> fields on the target vertices.
+
+    Parameters
+    ----------
+    V_stuck : (n, 3) float
+        Source vertices placed on the target surface (dense correspondence), target frame.
+    F_src : (m, 3) int
+        Source triangles.
+    fields : dict of str -> (n,) or (n, k) array
+        Source fields. Integer fields are labels (the dominant vertex's label);
+        float fields are interpolated barycentrically.
+    V_tgt : (n_t, 3) float
+        Target vertices.
+    F_tgt : (m_t, 3) int
+        Target triangles.
+    source_reliable : (n,) bool, optional
+        Source vertices whose correspondence is trusted (e.g. not folded).
+    max_distance : float
+        A target vertex farther than this (fraction of the target's size) from
+        the stuck surface is unreliable.
+    max_angle : float
+        Degrees; a target vertex whose normal differs more from the stuck
+        surface's is unreliable.
+
+    Returns
+    -------
+    out : dict of str -> array
+        The same keys, one row per target vertex.
+    reliable : (n_t,) bool
+        Target vertices that copied their value (the rest were inpainted).
+    """
+    from .stick import triangle_normals, vertex_normals
+
+    size = np.ptp(V_tgt, axis=0).max()
+    face, bary, dist = sample_fields(V_stuck, F_src, V_tgt)
+    n_src = triangle_normals(V_stuck, F_src)[face]
+    n_src /= np.maximum(np.linalg.norm(n_src, axis=1, keepdims=True), 1e-300)
+    n_tgt = vertex_normals(V_tgt, F_tgt)
+    cos = (n_src * n_tgt).sum(axis=1)
+    reliable = (dist <= max_distance * size) & (cos >= np.cos(np.radians(max_angle)))
+    if source_reliable is not None:
+        reliable &= np.asarray(source_reliable, dtype=bool)[F_src[face]].all(axis=1)
+    corners = F_src[face]
+    dominant = corners[np.arange(len(face)), np.argmax(bary, axis=1)]
+    out = {}
+    for name, field in fields.items():
+        field = np.asarray(field)
+        if np.issubdtype(field.dtype, np.integer) or field.dtype == bool:
+            lab = field[dominant]
+            classes = np.unique(field)
+            onehot = (lab[:, None] == classes[None, :]).astype(np.float64)
+            filled = inpaint(V_tgt, F_tgt, onehot, reliable)
+            out[name] = np.where(reliable, lab, classes[np.argmax(filled, axis=1)]).astype(field.dtype)
+        else:
+            vals = np.einsum("ki,ki...->k...", bary, field[corners].astype(np.float64))
+            out[name] = inpaint(V_tgt, F_tgt, vals, reliable)
+    return out, reliable
+
+
+def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, target_landmarks, **fit_options):
+    """Transfer per-vertex fields from one landmarked mesh to another.
+
+    Parameters
+    ----------
+    source_mesh, target_mesh : (V, F) pairs or mesh file paths
+        Each in its own frame and units.
+    fields : dict of str -> (n_src,) or (n_src, k) array
+        Per source vertex; integer arrays are labels.
+    source_landmarks, target_landmarks : dict of str -> (3,) or landmark file paths
+        Paired by name (at least 10 shared names recommended).
+
+    Returns
+    -------
+    dict of str -> array, one row per target vertex.
+    """
+    from .fit import dense_correspondence
+    from .io.landmarks import read_landmarks
+    from .io.mesh import check_mesh, load_mesh
+
+    def mesh(m):
+        return load_mesh(m) if isinstance(m, (str, bytes)) or hasattr(m, "__fspath__") else check_mesh(*m)
+
+    def marks(lm):
+        return read_landmarks(lm) if isinstance(lm, (str, bytes)) or hasattr(lm, "__fspath__") else lm
+
+    Vs, Fs = mesh(source_mesh)
+    Vt, Ft = mesh(target_mesh)
+    for name, f in fields.items():
+        if len(f) != len(Vs):
+            raise AutobonesError(f"field {name!r} has {len(f)} rows; the source mesh has {len(Vs)} vertices")
+    P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, marks(source_landmarks), marks(target_landmarks), **fit_options)
+    out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok)
+    return out
