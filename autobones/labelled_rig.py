@@ -149,6 +149,7 @@ class LabelledRig:
             raise AutobonesError(f"{folder}: exists and is not a folder")
         tmp = tempfile.mkdtemp(prefix="." + os.path.basename(folder) + "-", dir=parent)
         try:
+            os.chmod(tmp, 0o755)
             with open(os.path.join(tmp, "rig.json"), "w", encoding="utf-8") as fh:
                 json.dump(self.to_json(), fh, indent=1)
                 fh.write("\n")
