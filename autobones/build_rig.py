@@ -50,7 +50,8 @@ Regions (field ``region``, classes in :data:`REGIONS`), first rule that holds wi
              brow_outer + 0.6 cm; front
     forehead above the brow band up to 3 cm above frontotemporale, |x| < ft + 1 cm; front
     chin     jaw weight > 1/2 and |x| < 0.9 |x_cheilion|, below the lips
-    jaw      jaw weight > 1/2
+    jaw      jaw weight > 1/2, or within 1.5 cm of a gonion (the jaw angle lies on the
+             jaw weight's border planes)
     cheeks   in front of the ears (z > tragion + 0.3 cm), between the mouth/jaw and the eyes
     neck     below the neck plane (0.8 cm under the menton to the skull base behind)
     scalp    everything else
@@ -377,7 +378,10 @@ def _regions(Vc, L, cm, jaw, below_mouth, jaw0):
     put((y >= brow_top) & (y < ft[1] + 3.0 * cm) & (ax < ft[0] + 1.0 * cm) & (z > ft[2] - 1.0 * cm), "forehead")
     # chin and jaw
     put((jaw > 0.5) & (ax < 0.9 * ch[0]) & (y < L["labiale_inferius"][1]), "chin")
-    put(jaw > 0.5, "jaw")
+    # the jaw angle sits on the border planes of the jaw weight (they pass through the gonions):
+    # skin within 1.5 cm of a gonion is jaw too
+    near_go = np.minimum(np.linalg.norm(Vc - L["gonion_l"], axis=1), np.linalg.norm(Vc - L["gonion_r"], axis=1))
+    put((jaw > 0.5) | ((near_go < 1.5 * cm) & (below_mouth > -0.5 * cm)), "jaw")
     # neck: below the plane (containing the x axis) through 0.8 cm under the menton and the
     # skull base behind (opisthocranion depth, head pivot height)
     a = L["menton"] + np.array([0.0, -0.8 * cm, 0.0])
