@@ -18,7 +18,7 @@ mesh edges that lie in the plane x = 0, which the symmetric build guarantees):
   stomion         deepest point between the two lip maxima (the closed mouth line)
   labiale_inf.    most anterior point 1-15 mm below stomion
   sublabiale      deepest point between labiale inferius and pogonion
-  pogonion        most anterior chin point 1-4 cm below stomion... below sublabiale
+  pogonion        most anterior profile point 1-4.5 cm below labiale inferius
   menton          lowest profile point within 2.5 cm behind pogonion
 Bilateral (placed on the subject's left, x > 0, snapped to the closest surface
 point, and mirrored x -> -x for the right; the mesh is exactly symmetric):
