@@ -14,5 +14,21 @@ from .orient import Frame, detect_frame
 from .place import place
 from .rig import Rig
 from .skeleton import Skeleton
+from .transfer import transfer
+from .attributes import transfer_attributes
+from .labelled_rig import LabelledRig
 
-__all__ = ["AutobonesError", "Frame", "Rig", "Skeleton", "detect_frame", "load_mesh", "place", "__version__"]
+
+def build_rig(base, landmarks, **kwargs):
+    """A labelled generic rig from a base head (path or (V, F)) and its landmarks (path or dict);
+    see :func:`autobones.build_rig.build_rig`."""
+    from .build_rig import build_rig as _build
+    from .io.landmarks import read_landmarks
+    from .place import resolve_mesh
+
+    V, F, _ = resolve_mesh(base)
+    lm = read_landmarks(landmarks) if not isinstance(landmarks, dict) else landmarks
+    return _build(V, F, lm, **kwargs)
+
+__all__ = ["AutobonesError", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "load_mesh",
+           "place", "transfer", "transfer_attributes", "__version__"]

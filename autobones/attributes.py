@@ -170,18 +170,28 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
         reliable &= np.asarray(source_reliable, dtype=bool)[F_src[face]].all(axis=1)
     corners = F_src[face]
     dominant = corners[np.arange(len(face)), np.argmax(bary, axis=1)]
-    out = {}
+    # every field becomes columns of one matrix, so one factorisation inpaints them all
+    columns, layout = [], []
     for name, field in fields.items():
         field = np.asarray(field)
         if np.issubdtype(field.dtype, np.integer) or field.dtype == bool:
             lab = field[dominant]
             classes = np.unique(field)
-            onehot = (lab[:, None] == classes[None, :]).astype(np.float64)
-            filled = inpaint(V_tgt, F_tgt, onehot, reliable)
-            out[name] = np.where(reliable, lab, classes[np.argmax(filled, axis=1)]).astype(field.dtype)
+            columns.append((lab[:, None] == classes[None, :]).astype(np.float64))
+            layout.append((name, "labels", field.dtype, classes, lab))
         else:
             vals = np.einsum("ki,ki...->k...", bary, field[corners].astype(np.float64))
-            out[name] = inpaint(V_tgt, F_tgt, vals, reliable)
+            columns.append(vals.reshape(len(face), -1))
+            layout.append((name, "values", field.dtype, field.shape[1:], None))
+    filled = inpaint(V_tgt, F_tgt, np.concatenate(columns, axis=1), reliable) if columns else None
+    out, at = {}, 0
+    for (name, kind, dtype, extra, lab), col in zip(layout, columns):
+        block = filled[:, at:at + col.shape[1]]
+        at += col.shape[1]
+        if kind == "labels":
+            out[name] = np.where(reliable, lab, extra[np.argmax(block, axis=1)]).astype(dtype)
+        else:
+            out[name] = block.reshape((len(face),) + tuple(extra))
     return out, reliable
 
 

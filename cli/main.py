@@ -32,6 +32,28 @@ Inputs: OBJ, PLY, OFF, STL, glTF/GLB, in any frame and unit; +Y-up/+Z-front is n
 """
 
 
+TRANSFER_EPILOG = """\
+examples:
+  autobones transfer head.obj --landmarks head.landmarks.json -o head.glb
+  autobones transfer goat.obj --landmarks goat.pp -o goat.glb            MeshLab picked points
+  autobones transfer scan.ply --landmarks scan.ibug68.json --rig my_rig/ -o scan.glb
+
+output: OUT.glb (joints neck, head, jaw, eye_l, eye_r), OUT.rig.json (bones, muscles with
+origins and insertions, landmarks used, label class names), OUT.weights.npz (weights and
+every transferred field as field/<name>).
+
+Landmark names, frame and file formats: the landmark contract (README). Bad landmarks
+(unknown names, left/right swapped, off the surface, wrong units, too few) are refused
+with one line naming the problem.
+"""
+
+BUILD_EPILOG = """\
+examples:
+  autobones build-rig base.obj --landmarks base.landmarks.json -o my_rig/
+  autobones transfer scan.obj --landmarks scan.landmarks.json --rig my_rig/ -o scan.glb
+"""
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="autobones",
@@ -52,6 +74,34 @@ def build_parser():
     p.add_argument("--front", help="input axis the face looks along (default: detected)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the k-means restarts (default 0)")
     _common(p)
+
+    t = sub.add_parser(
+        "transfer", help="carry the labelled generic rig onto a landmarked head",
+        description="Warp the labelled generic rig onto a head by thin-plate splines from shared landmarks, "
+                    "stick it to the surface (dense correspondence), and carry its skeleton (neck, head, jaw, "
+                    "eyes), muscles, skin weights and attribute fields onto the head's own vertices "
+                    "(seed 004). Writes the same skinned glTF as `place`.",
+        epilog=TRANSFER_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    t.add_argument("head", help="head mesh file (OBJ, PLY, OFF, STL, glTF/GLB; any frame and unit)")
+    t.add_argument("--landmarks", required=True,
+                   help="landmark file in the head's frame: contract .json, MeshLab .pp, or an iBUG-68 "
+                        ".json/.pts/.ljson; at least 10 names shared with the rig")
+    t.add_argument("--rig", help="generic rig folder made by `autobones build-rig` (default: the built-in one)")
+    t.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
+    t.add_argument("--up", help="input axis that points up (default: detected; used to check left/right)")
+    t.add_argument("--front", help="input axis the face looks along (default: detected)")
+    _common(t)
+
+    b = sub.add_parser(
+        "build-rig", help="build a labelled generic rig from a base head and its landmarks",
+        description="Derive a labelled generic rig (skeleton, muscles, skin weights, region labels, muscle "
+                    "influence fields) from any base head plus its landmarks, with the same code that built "
+                    "the built-in rig. Use the folder with `autobones transfer --rig`.",
+        epilog=BUILD_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("base", help="base head mesh file")
+    b.add_argument("--landmarks", required=True, help="the base head's landmark file (names the rig needs: see below)")
+    b.add_argument("-o", "--output", required=True, help="output folder (rig.json, mesh.obj, fields.npz)")
+    _common(b)
     return parser
 
 
@@ -64,11 +114,7 @@ def cmd_place(args):
     import autobones
 
     head = args.head
-    if args.output:
-        out = args.output
-    else:
-        stem = "default_head" if head is None else os.path.splitext(os.path.basename(head))[0]
-        out = f"{stem}.rig.glb"
+    out = args.output or _default_out(head)
     t = time.perf_counter()
     rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=args.seed)
     written = rig.save(out)
@@ -78,7 +124,37 @@ def cmd_place(args):
     return 0
 
 
-COMMANDS = {"place": cmd_place}
+def _default_out(head):
+    stem = "default_head" if head is None else os.path.splitext(os.path.basename(head))[0]
+    return f"{stem}.rig.glb"
+
+
+def cmd_transfer(args):
+    import autobones
+
+    out = args.output or _default_out(args.head)
+    t = time.perf_counter()
+    rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
+    written = rig.save(out)
+    print(f"{written[0]}: {len(rig.skeleton)} bones, {len(rig.extra['muscles'])} muscles, "
+          f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
+          f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
+          f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
+    return 0
+
+
+def cmd_build_rig(args):
+    import autobones
+
+    t = time.perf_counter()
+    rig = autobones.build_rig(args.base, args.landmarks)
+    rig.save(args.output)
+    print(f"{args.output}: {len(rig.skeleton)} bones, {len(rig.muscles)} muscles, {len(rig.fields)} fields, "
+          f"{len(rig.landmarks)} landmarks, {len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s")
+    return 0
+
+
+COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "build-rig": cmd_build_rig}
 
 
 def _axis_values(argv):

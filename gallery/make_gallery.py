@@ -54,12 +54,47 @@ def rig_picture(rig, size=420):
     return np.concatenate([top, bottom], axis=0)
 
 
+TRANSFERS = {  # name: (mesh, landmark file), relative to ../shared/data or the project
+    "ict_identity002": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
+    "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
+    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
+    "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
+}
+
+REGION_COLOURS = np.array([colorsys.hsv_to_rgb((0.07 + i * 0.618034) % 1.0, 0.45, 0.95) for i in range(16)])
+
+
+def transfer_picture(rig, size=420):
+    """Top: jaw weights (green) with the skeleton (blue) and muscles (red); bottom: regions."""
+    C = rig.frame.to_canonical(rig.vertices)
+    views = ("front", "three_quarter", "side")
+    jaw = rig.weights[:, rig.skeleton.names.index("jaw")]
+    skin = np.array([0.85, 0.85, 0.85]) * (1 - jaw[:, None]) + np.array([0.15, 0.75, 0.2]) * jaw[:, None]
+    bones = np.stack([rig.frame.to_canonical(rig.skeleton.heads), rig.frame.to_canonical(rig.skeleton.tails)], 1)
+    muscles = np.array([[m["origin"], m["insertion"]] for m in rig.extra["muscles"]]).reshape(-1, 3)
+    muscles = rig.frame.to_canonical(muscles).reshape(-1, 2, 3)
+    top = render.render_views(C, rig.faces, vertex_colors=skin, views=views, size=(size, size),
+                              segments=np.concatenate([bones, muscles]), points=bones[:, 0],
+                              point_color=(20, 40, 200), segment_color=(200, 30, 30))
+    regions = REGION_COLOURS[rig.fields["region"] % len(REGION_COLOURS)]
+    bottom = render.render_views(C, rig.faces, vertex_colors=regions, views=views, size=(size, size))
+    return np.concatenate([top, bottom], axis=0)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", nargs="*", choices=sorted(HEADS))
+    ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS])
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
-    for name in args.only or HEADS:
+    for name in args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS]:
+        if name.startswith("transfer_"):
+            mesh, marks = TRANSFERS[name[len("transfer_"):]]
+            marks = HERE.parent / marks if marks.startswith("tests/") else DATA / marks
+            rig = autobones.transfer(DATA / mesh, marks)
+            path = Path(args.out) / f"{name}.png"
+            render.save_png(path, transfer_picture(rig))
+            print(f"{path}: {len(rig.options['landmarks_used'])} landmarks, {len(rig.extra['muscles'])} muscles")
+            continue
         rel, density = HEADS[name]
         rig = autobones.place(None if rel is None else DATA / rel, density=density)
         path = Path(args.out) / f"place_{name}.png"

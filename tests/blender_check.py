@@ -173,7 +173,7 @@ def main(argv):
     top = int(np.argmax(rest @ up))  # the top of the head: farthest along neck -> head joint
     report["top_vertex"] = {"index": top, "position": rest[top].tolist()}
     report["poses"] = {}
-    for name in [n for n in ("head", "neck", face) if n in names]:
+    for name in [n for n in ("head", "neck", face, "jaw") if n in names]:
         pb = arm.pose.bones[name]
         pb.rotation_mode = "QUATERNION"
         pb.rotation_quaternion = mathutils.Quaternion((1.0, 0.0, 0.0), math.radians(ROTATION_DEG))
@@ -215,6 +215,8 @@ def main(argv):
             "top_rigid_displacement": float(np.linalg.norm(rigid[top] - rest[top])),
             "max_error_vs_lbs": float(np.linalg.norm(posed - lbs, axis=1).max()),
         }
+        if name == "jaw":  # per vertex, in the file's order, to see which parts the jaw carries
+            report["poses"][name]["displacement"] = [float(d) for d in disp]
         pb.rotation_quaternion = mathutils.Quaternion()
         bpy.context.view_layer.update()
     after = evaluated_positions(obj)

@@ -11,7 +11,6 @@ that installs it, they do not skip.
 """
 import json
 import math
-import os
 import shutil
 import subprocess
 import warnings
@@ -25,6 +24,8 @@ import trimesh
 import autobones
 from autobones.io.gltf import top_influences
 
+from shared_data import run_blender_check
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 MESHES = {
@@ -35,7 +36,6 @@ MESHES = {
 DENSITY = 4  # facial bones: enough to exercise face_XX joints, small enough to stay fast
 VALIDATOR_DIR = REPO / "tools" / "gltf-validator"
 VALIDATE_JS = VALIDATOR_DIR / "validate.js"
-BLENDER_SCRIPT = REPO / "tests" / "blender_check.py"
 ROTATION_DEG = 30.0  # what blender_check.py rotates each bone by
 
 
@@ -249,7 +249,6 @@ def test_khronos_validator_reports_no_errors(rigged, name):
 
 # --------------------------------------------------------------------------- Blender
 
-BLENDER_INSTALL = "install Blender 3.4 with numpy for its glTF importer: apt-get install blender python3-numpy"
 
 
 @pytest.fixture(scope="module")
@@ -260,24 +259,8 @@ def blender_report(rigged, tmp_path_factory):
 
     def get(name):
         if name not in cache:
-            blender = shutil.which("blender")
-            if blender is None:
-                pytest.fail(f"blender is not on PATH; {BLENDER_INSTALL}")
             rig, path = rigged(name)
-            report_path = folder / f"{name}.json"
-            cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1",
-                   "-P", str(BLENDER_SCRIPT), "--", str(path), str(report_path)]
-            # Blender's embedded (system) Python locates its standard library from the first
-            # python3.X on PATH: a pyenv or virtualenv interpreter running pytest would hijack
-            # it and hide the system numpy the glTF importer needs. Put Blender's own folder first.
-            env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHOME", "PYTHONPATH")}
-            env["PATH"] = os.path.dirname(os.path.realpath(blender)) + os.pathsep + env.get("PATH", "")
-            out = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
-            log = (out.stdout + out.stderr)[-3000:]
-            if "No module named 'numpy'" in log:
-                pytest.fail(f"Blender's Python has no numpy, which its glTF importer needs; {BLENDER_INSTALL}\n{log}")
-            assert out.returncode == 0 and report_path.exists(), f"{' '.join(cmd)} failed:\n{log}"
-            cache[name] = rig, json.loads(report_path.read_text())
+            cache[name] = rig, run_blender_check(path, folder / f"{name}.json")
         return cache[name]
 
     return get

@@ -1,0 +1,202 @@
+"""``transfer``: a labelled generic rig carried onto a landmarked head (seed 004 §3.7).
+
+The pipeline, one module a stage:
+1. landmarks (io.landmarks): read, checked against the head (names, units,
+   left/right, distance to the surface);
+2. warp + stick (tps, fit, stick): the generic skin is warped onto the head by
+   thin-plate splines from the shared landmarks, fitted to the surface and
+   stuck to it: every generic vertex gets its point on the head (a dense
+   correspondence);
+3. under-skin points (tps): a second TPS, fitted on a well-spread subsample of
+   that correspondence, carries the skeleton and the muscle origins (004 §3.4);
+   muscle insertions ride the correspondence itself;
+4. attributes (attributes): skin weights, region labels and every other
+   field land on the head's own vertices, with unreliable matches inpainted;
+5. the result is a :class:`autobones.rig.Rig`, saved as the same skinned
+   glTF as ``place`` with muscles and fields in the sidecars.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import time
+
+import numpy as np
+
+from .attributes import transfer_fields
+from .errors import AutobonesError
+from .fit import dense_correspondence
+from .io.landmarks import NAMES, read_landmarks, validate_landmarks
+from .orient import detect_frame
+from .place import resolve_mesh
+from .rig import Rig
+from .tps import ThinPlateSpline
+
+log = logging.getLogger("autobones")
+
+MIN_LANDMARKS = 10
+
+
+def default_rig_path():
+    """Folder of the built-in generic rig."""
+    from generic_rig import HERE
+
+    return os.path.join(HERE, "default")
+
+
+def load_generic(rig=None):
+    """A LabelledRig from a folder (None: the built-in generic rig) or as given."""
+    from .labelled_rig import LabelledRig
+
+    if rig is None or isinstance(rig, (str, os.PathLike)):
+        return LabelledRig.load(default_rig_path() if rig is None else rig)
+    return rig
+
+
+def spread_subsample(P, count):
+    """Indices of ``count`` well-spread points of ``P`` (greedy farthest-point order from
+    the point nearest the centroid; deterministic)."""
+    count = min(count, len(P))
+    chosen = np.empty(count, dtype=np.int64)
+    chosen[0] = int(np.argmin(((P - P.mean(axis=0)) ** 2).sum(axis=1)))
+    d = ((P - P[chosen[0]]) ** 2).sum(axis=1)
+    for i in range(1, count):
+        chosen[i] = int(np.argmax(d))
+        d = np.minimum(d, ((P - P[chosen[i]]) ** 2).sum(axis=1))
+    return chosen
+
+
+def ride(points, V_src, F_src, P):
+    """Points on the source surface moved with the correspondence ``P`` (n_src, 3): each is
+    expressed in barycentric coordinates of its closest source triangle."""
+    from .stick import closest_points
+
+    _, face, bary = closest_points(np.asarray(points, dtype=np.float64), V_src, F_src)[:3]
+    return np.einsum("ki,kij->kj", bary, P[F_src[face]])
+
+
+def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400, **fit_options):
+    """Carry the generic rig onto a landmarked head.
+
+    Parameters
+    ----------
+    head : str, (V, F) or None
+        The head mesh, any frame and unit (None: the built-in default head).
+    landmarks : str or dict of str -> (3,)
+        A landmark file (contract JSON, MeshLab .pp, iBUG-68 .json/.pts/.ljson)
+        or a dict, in the head's own frame; at least 10 names shared with the rig.
+    rig : str, LabelledRig or None
+        The generic rig (a folder written by ``build_rig``); None: the built-in one.
+    up, front : str or None
+        Override the detected axes (used to check left/right of the landmarks).
+    control_points : int
+        Size of the correspondence subsample the under-skin TPS is fitted on.
+
+    Returns
+    -------
+    Rig
+        In the head's frame and units: the rig's skeleton, skin weights, labels,
+        fields and muscles on the head's own vertices.
+    """
+    timings = {}
+    t = time.perf_counter()
+
+    def lap(stage):
+        nonlocal t
+        now = time.perf_counter()
+        timings[stage] = now - t
+        log.info("%-10s %.2f s", stage, now - t)
+        t = now
+
+    V, F, source = resolve_mesh(head)
+    generic = load_generic(rig)
+    lap("load")
+    frame = detect_frame(V, F, up=up, front=front)
+    where = landmarks if isinstance(landmarks, (str, os.PathLike)) else "landmarks"
+    lm = read_landmarks(landmarks) if isinstance(landmarks, (str, os.PathLike)) else dict(landmarks)
+    lm = validate_landmarks(lm, V, F, frame=frame, min_count=MIN_LANDMARKS, source=str(where))
+    shared = [n for n in NAMES if n in lm and n in generic.landmarks]
+    if len(shared) < MIN_LANDMARKS:
+        raise AutobonesError(
+            f"{where}: only {len(shared)} landmark names are shared with the generic rig "
+            f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} well-spread ones are needed")
+    lap("landmarks")
+    src = {n: generic.landmarks[n] for n in shared}
+    dst = {n: lm[n] for n in shared}
+    fit_timings = {}
+    P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
+                                       **fit_options)
+    timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
+    lap("correspond")
+
+    good = np.flatnonzero(ok) if ok.sum() >= 20 else np.arange(len(P))
+    idx = good[spread_subsample(generic.vertices[good], control_points)]
+    under = ThinPlateSpline(regularization=1e-3).fit(generic.vertices[idx], P[idx])
+    skeleton = generic.skeleton.transformed(under.transform)
+    muscles = []
+    for m in generic.muscles:
+        m = dict(m)
+        m["origin"] = under.transform(np.asarray(m["origin"], dtype=np.float64)[None])[0]
+        m["insertion"] = ride(np.asarray(m["insertion"], dtype=np.float64)[None], generic.vertices,
+                              generic.faces, P)[0]
+        muscles.append(m)
+    lap("skeleton")
+
+    fields = {"__weights__": generic.weights, **generic.fields}
+    out, reliable = transfer_fields(P, generic.faces, fields, V, F, source_reliable=ok)
+    W = np.clip(out.pop("__weights__"), 0.0, None)
+    W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
+    W = bind_eyeballs(V, F, W, skeleton, generic, under)
+    lap("attributes")
+
+    labels = out["depth_group"].astype(np.int8) if "depth_group" in out else np.zeros(len(V), np.int8)
+    facial_mask = labels == 0
+    if "region" in out and "region" in generic.labels and "neck" in generic.labels["region"]:
+        facial_mask &= out["region"] != generic.labels["region"].index("neck")
+    options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
+               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"}
+    return Rig(
+        vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
+        frame=frame, options=options, timings=timings,
+        extra={"source": source, "muscles": [_jsonable(m) for m in muscles],
+               "landmarks": {n: lm[n].tolist() for n in lm},
+               "field_labels": {k: list(v) for k, v in generic.labels.items()},
+               "reliable_fraction": float(reliable.mean())},
+        fields=out)
+
+
+def bind_eyeballs(V, F, W, skeleton, generic, under):
+    """Separate parts sitting on an eye bone (eyeballs, corneas) follow it rigidly.
+
+    A generic skin has no eyeballs to carry weights for, and on the target they
+    would take the eyelids' weights from the closest skin. A part counts as an
+    eyeball when its centroid is within 0.35 eye-fissure lengths of the eye bone's
+    pivot and it is no wider than 1.5 fissures (eyelashes and lids sit farther out).
+    """
+    from .fit import mesh_parts
+
+    names = skeleton.names
+    if not all(n in generic.landmarks for n in ("exocanthion_l", "endocanthion_l")):
+        return W
+    ex, en = under.transform(np.array([generic.landmarks["exocanthion_l"], generic.landmarks["endocanthion_l"]]))
+    fissure = np.linalg.norm(ex - en)
+    part = mesh_parts(len(V), F)
+    if part.max() == 0:
+        return W
+    count = np.bincount(part)
+    centroid = np.stack([np.bincount(part, weights=V[:, j]) for j in range(3)], axis=1) / count[:, None]
+    W = W.copy()
+    for eye in ("eye_l", "eye_r"):
+        if eye not in names:
+            continue
+        pivot = skeleton.heads[names.index(eye)]
+        for p in np.flatnonzero(np.linalg.norm(centroid - pivot, axis=1) < 0.35 * fissure):
+            members = part == p
+            if np.ptp(V[members], axis=0).max() < 1.5 * fissure and members.sum() < 0.5 * len(V):
+                W[members] = 0.0
+                W[members, names.index(eye)] = 1.0
+    return W
+
+
+def _jsonable(m):
+    return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in m.items()}

@@ -1,0 +1,160 @@
+"""autobones.transfer: the generic rig carried onto human, cartoon and animal heads."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import autobones
+from autobones.errors import AutobonesError
+from autobones.io.landmarks import mirror_name, read_landmarks, write_landmarks
+from autobones.io.mesh import load_mesh
+
+from shared_data import ROOT, data, run_blender_check
+
+TEST_LANDMARKS = ROOT / "tests" / "landmarks"
+HEADS = {
+    "ict": (data("ict/identity002.obj"), data("ict/identity002.landmarks.json")),
+    "goat": (data("misc/goathead.obj"), TEST_LANDMARKS / "goathead.landmarks.json"),
+    "robot": (data("misc/robot_head_neutral.obj"), TEST_LANDMARKS / "robot_head_neutral.landmarks.json"),
+}
+
+
+@pytest.fixture(scope="module")
+def transferred():
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            mesh, marks = HEADS[name]
+            cache[name] = autobones.transfer(mesh, marks)
+        return cache[name]
+
+    return get
+
+
+def _jaw(rig):
+    return rig.weights[:, rig.skeleton.names.index("jaw")]
+
+
+def _at(rig, points):
+    return cKDTree(rig.vertices).query(np.asarray(points))[1]
+
+
+@pytest.mark.parametrize("name", sorted(HEADS))
+def test_weights_partition_and_skeleton(transferred, name):
+    rig = transferred(name)
+    W = rig.weights
+    assert W.shape == (len(rig.vertices), len(rig.skeleton)) and W.min() >= 0
+    np.testing.assert_allclose(W.sum(axis=1), 1.0, atol=1e-9)
+    assert {"neck", "head", "jaw", "eye_l", "eye_r"} <= set(rig.skeleton.names)
+    assert len(rig.extra["muscles"]) == 26
+    assert rig.fields["region"].shape == (len(rig.vertices),)
+
+
+@pytest.mark.parametrize("name", sorted(HEADS))
+def test_jaw_weights_land_on_the_lower_jaw(transferred, name):
+    rig = transferred(name)
+    lm = read_landmarks(HEADS[name][1])
+    jaw = _jaw(rig)
+    C = rig.frame.to_canonical(rig.vertices)
+    lower = [n for n in ("menton", "pogonion", "labiale_inferius") if n in lm]
+    upper = [n for n in ("pronasale", "nasion", "labiale_superius", "subnasale", "vertex", "glabella") if n in lm]
+    assert lower and upper
+    assert jaw[_at(rig, [lm[n] for n in lower])].min() >= 0.8
+    assert jaw[_at(rig, [lm[n] for n in upper])].max() <= 0.2
+    # the jaw field sits below the mouth: its weighted centroid is lower than the mouth line
+    mouth = rig.frame.to_canonical(np.array([lm[n] for n in ("stomion", "cheilion_l", "cheilion_r") if n in lm]))
+    assert (jaw[:, None] * C).sum(0)[1] / jaw.sum() < mouth[:, 1].mean()
+
+
+def test_ict_eyeballs_follow_the_eye_bones(transferred):
+    rig = transferred("ict")
+    W, names = rig.weights, rig.skeleton.names
+    for eye, side in (("eye_l", 1), ("eye_r", -1)):
+        bound = W[:, names.index(eye)] > 0.99
+        assert bound.sum() > 500  # the separate eyeball parts
+        assert np.sign(rig.frame.to_canonical(rig.vertices[bound])[:, 0].mean()) == side
+
+
+def test_skeleton_lands_inside_the_head(transferred):
+    import igl
+
+    rig = transferred("ict")
+    w = igl.fast_winding_number(rig.vertices, rig.faces, rig.skeleton.heads)
+    assert (w > 0.5).all(), dict(zip(rig.skeleton.names, w.round(2)))
+    lm = read_landmarks(HEADS["ict"][1])
+    for eye, side in (("eye_l", "l"), ("eye_r", "r")):
+        corners = (lm[f"exocanthion_{side}"] + lm[f"endocanthion_{side}"]) / 2
+        fissure = np.linalg.norm(lm[f"exocanthion_{side}"] - lm[f"endocanthion_{side}"])
+        assert np.linalg.norm(rig.skeleton.heads[rig.skeleton.names.index(eye)] - corners) < fissure
+
+
+@pytest.mark.parametrize("name", ["goat", "robot"])
+def test_glb_validates_and_rotating_the_jaw_opens_the_mouth(transferred, name, tmp_path):
+    rig = transferred(name)
+    glb = tmp_path / f"{name}.glb"
+    rig.save(glb)
+    report = subprocess.run(["node", str(ROOT / "tools" / "gltf-validator" / "validate.js"), str(glb)],
+                            capture_output=True, text=True, timeout=120)
+    assert report.returncode == 0, report.stderr
+    assert json.loads(report.stdout)["issues"]["numErrors"] == 0
+    rep = run_blender_check(glb, tmp_path / "report.json")
+    disp = np.array(rep["poses"]["jaw"]["displacement"])
+    jaw = _jaw(rig)
+    size = rig.frame.size
+    assert disp[jaw > 0.8].mean() > 0.05 * size  # the chin swings
+    assert disp[jaw < 0.01].max() < 1e-4 * size  # the skull stays
+
+
+def test_same_result_twice():
+    mesh, marks = HEADS["goat"]
+    a, b = autobones.transfer(mesh, marks), autobones.transfer(mesh, marks)
+    assert a.weights.tobytes() == b.weights.tobytes()
+    assert a.skeleton.heads.tobytes() == b.skeleton.heads.tobytes()
+
+
+def test_bad_landmarks_are_refused_with_one_clear_error(tmp_path):
+    mesh, marks = HEADS["ict"]
+    lm = read_landmarks(marks)
+    cases = {
+        "unknown": ({**lm, "nose_tipp": lm["pronasale"]}, "nose_tipp"),
+        "mirrored": ({mirror_name(k): v for k, v in lm.items()}, "swapped"),
+        "far": ({**lm, "pronasale": lm["pronasale"] + [0, 0, 20.0]}, "pronasale"),
+        "few": ({k: lm[k] for k in list(lm)[:6]}, "10"),
+        "units": ({k: v * 10 for k, v in lm.items()}, "unit"),
+    }
+    for case, (bad, needle) in cases.items():
+        with pytest.raises(AutobonesError) as err:
+            autobones.transfer(mesh, bad)
+        assert needle in str(err.value) and "\n" not in str(err.value), (case, str(err.value))
+
+
+def test_cli_transfer_and_build_rig(tmp_path):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    cli = [sys.executable, "-m", "cli.main"]
+    base = ROOT / "generic_rig"
+    r = subprocess.run(cli + ["build-rig", str(base / "default_head.obj"), "--landmarks",
+                              str(base / "default_head.landmarks.json"), "-o", str(tmp_path / "my_rig")],
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert sorted(os.listdir(tmp_path / "my_rig")) == ["fields.npz", "mesh.obj", "rig.json"]
+    mesh, marks = HEADS["goat"]
+    r = subprocess.run(cli + ["transfer", str(mesh), "--landmarks", str(marks), "--rig", str(tmp_path / "my_rig"),
+                              "-o", str(tmp_path / "goat.glb")], env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    side = json.loads((tmp_path / "goat.rig.json").read_text())
+    assert [b["name"] for b in side["bones"]][:5] == ["neck", "head", "jaw", "eye_l", "eye_r"]
+    assert len(side["muscles"]) == 26 and "region" in side["field_labels"]
+    npz = np.load(tmp_path / "goat.weights.npz")
+    assert "field/region" in npz and npz["weights"].shape[0] == len(load_mesh(mesh)[0])
+    # bad landmarks through the CLI: one line, exit 2, nothing written
+    bad = tmp_path / "bad.landmarks.json"
+    write_landmarks(bad, {mirror_name(k): v for k, v in read_landmarks(HEADS["ict"][1]).items()})
+    r = subprocess.run(cli + ["transfer", str(HEADS["ict"][0]), "--landmarks", str(bad), "-o", str(tmp_path / "x.glb")],
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    assert not (tmp_path / "x.glb").exists()
