@@ -90,6 +90,24 @@ class Rig:
             **self.extra,
         }
 
+    def muscle_markers(self):
+        """glTF marker nodes for the muscles: origins ride the skull (``head``), insertions the
+        bone that dominates the skin where they attach."""
+        muscles = self.extra.get("muscles", [])
+        if not muscles:
+            return []
+        from scipy.spatial import cKDTree
+
+        names = self.skeleton.names
+        skull = "head" if "head" in names else names[0]
+        ins = np.array([m["insertion"] for m in muscles], dtype=np.float64)
+        _, nearest = cKDTree(self.vertices).query(ins)
+        out = []
+        for m, v in zip(muscles, nearest):
+            out.append((f"muscle/{m['name']}/origin", skull, m["origin"]))
+            out.append((f"muscle/{m['name']}/insertion", names[int(np.argmax(self.weights[v]))], m["insertion"]))
+        return out
+
     def save(self, path):
         """Write ``path`` (.glb), its ``.rig.json`` sidecar and ``.weights.npz``.
 
@@ -112,7 +130,8 @@ class Rig:
                 os.close(fd)
                 temps.append(tmp)
             write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
-                      extras={"autobones": {"sidecar": os.path.basename(json_path)}})
+                      extras={"autobones": {"sidecar": os.path.basename(json_path)}},
+                      markers=self.muscle_markers())
             with open(temps[1], "w") as fh:
                 json.dump(self.sidecar(), fh, indent=1)
             with open(temps[2], "wb") as fh:

@@ -75,7 +75,7 @@ def ride(points, V_src, F_src, P):
     return np.einsum("ki,kij->kj", bary, P[F_src[face]])
 
 
-def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400, **fit_options):
+def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400, details=None, **fit_options):
     """Carry the generic rig onto a landmarked head.
 
     Parameters
@@ -91,6 +91,9 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
         Override the detected axes (used to check left/right of the landmarks).
     control_points : int
         Size of the correspondence subsample the under-skin TPS is fitted on.
+    details : dict, optional
+        Filled with ``correspondence`` ((n_rig, 3): each generic vertex's point on
+        the head) and ``reliable`` ((n_rig,) bool), for evaluation.
 
     Returns
     -------
@@ -127,6 +130,8 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
     P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
                                        **fit_options)
     timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
+    if details is not None:
+        details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
     good = np.flatnonzero(ok) if ok.sum() >= 20 else np.arange(len(P))

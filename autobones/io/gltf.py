@@ -74,7 +74,7 @@ def _quaternion(R):
     return (q * np.sign(q[3] or 1.0)).tolist()
 
 
-def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None):
+def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()):
     """Write the skinned mesh to ``path``.
 
     Parameters
@@ -91,6 +91,9 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None):
         Weights; the ``max_influences`` largest per vertex are written.
     extras : dict or None
         JSON-serialisable data stored in the asset's ``extras``.
+    markers : sequence of (name, bone name, (3,) position)
+        Extra named nodes (no mesh, not joints) parented to a bone, so they
+        follow it when posed: e.g. muscle origins and insertions.
     """
     V = np.asarray(V, dtype=np.float32)
     F = np.asarray(F, dtype=np.uint32)
@@ -114,6 +117,11 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None):
         if p >= 0:
             nodes[p].setdefault("children", []).append(i)
     ibm = np.array(ibm, dtype=np.float32)
+    for name, bone, position in markers:
+        b = skeleton.index(bone)
+        local = R[b].T @ (np.asarray(position, dtype=np.float64) - skeleton.heads[b])
+        nodes[b].setdefault("children", []).append(len(nodes))
+        nodes.append({"name": name, "translation": [float(v) for v in local]})
 
     blobs, views, accessors = [], [], []
 
@@ -139,6 +147,7 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None):
     inv = add(ibm, FLOAT, "MAT4")
 
     mesh_node = len(nodes)
+    n_joints = len(skeleton)
     roots = [i for i, p in enumerate(skeleton.parents) if p < 0]
     doc = {
         "asset": {"version": "2.0", "generator": "autobones", **({"extras": extras} if extras else {})},
@@ -148,7 +157,7 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None):
         "meshes": [{"name": "head_mesh", "primitives": [{
             "attributes": {"POSITION": pos, "JOINTS_0": jnt, "WEIGHTS_0": wgt},
             "indices": ind, "mode": 4}]}],
-        "skins": [{"name": "rig", "joints": list(range(len(nodes))), "skeleton": roots[0],
+        "skins": [{"name": "rig", "joints": list(range(n_joints)), "skeleton": roots[0],
                    "inverseBindMatrices": inv}],
         "accessors": accessors,
         "bufferViews": views,
