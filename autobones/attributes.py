@@ -166,10 +166,10 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     n_tgt = vertex_normals(V_tgt, F_tgt)
     cos = (n_src * n_tgt).sum(axis=1)
     reliable = (dist <= max_distance * size) & (cos >= np.cos(np.radians(max_angle)))
-    if source_reliable is not None:
-        reliable &= np.asarray(source_reliable, dtype=bool)[F_src[face]].all(axis=1)
     corners = F_src[face]
     dominant = corners[np.arange(len(face)), np.argmax(bary, axis=1)]
+    if source_reliable is not None:  # the source vertex that dominates the match must be trusted
+        reliable &= np.asarray(source_reliable, dtype=bool)[dominant]
     # every field becomes columns of one matrix, so one factorisation inpaints them all
     columns, layout = [], []
     for name, field in fields.items():

@@ -137,6 +137,33 @@ def _vertex_normals(V, F):
     return N / np.where(length > 0, length, 1.0)
 
 
+def _vertex_areas(V, F):
+    """A third of the area of the triangles around each vertex, ``(n,)``."""
+    A = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    return np.bincount(F.ravel(), np.repeat(A / 3.0, 3), minlength=len(V))
+
+
+def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big, cos_max):
+    """Target -> source matches: every target vertex ``tq`` goes to its nearest source vertex ``sidx``.
+
+    Same part only (part label times ``big`` as a fourth coordinate), dropped
+    when the normals differ by more than ``acos(cos_max)`` or the distance is
+    an outlier (> 5 x median). Returns ``has`` (n,) bool, a source vertex
+    received matches; ``M`` (n, 3) the area-weighted mean of its
+    matched target vertices (the centroid of the target surface closest to
+    it); ``a`` (n,) the target area it received.
+    """
+    d, i = cKDTree(np.c_[X[sidx], big * labels[sidx]]).query(np.c_[V_tgt[tq], big * tgt_part[tq]])
+    i = sidx[i]
+    ok = (np.einsum("ij,ij->i", N[i], N_tgt[tq]) >= cos_max) & (d <= 5.0 * np.median(d) + 1e-12)
+    i, k = i[ok], tq[ok]
+    a = np.bincount(i, area_t[k], minlength=len(X))
+    has = a > 0
+    M = np.stack([np.bincount(i, area_t[k] * V_tgt[k, c], minlength=len(X)) for c in range(3)], axis=1)
+    M[has] /= a[has, None]
+    return has, M, a
+
+
 def _part_map(src_part, tgt_part, nearest, agree):
     """Source part -> target part holding >= half of its compatible nearest vertices, else -1."""
     labels = np.full(src_part.max() + 1, -1, dtype=np.int64)
@@ -154,7 +181,7 @@ def _part_map(src_part, tgt_part, nearest, agree):
 
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
-                landmark_weight=1.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="source", timings=None):
+                landmark_weight=1.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="source", symmetric_weight=10.0, timings=None):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
     Parameters
@@ -278,6 +305,12 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
     BtQ = landmark_weight * (B.T @ Q)
     t2 = time.perf_counter()
 
+    if symmetric_weight > 0:
+        area_t = _vertex_areas(V_tgt, F_tgt)
+        area_s = np.maximum(_vertex_areas(X, F_src), 1e-300)
+        tlab = tgt_part if restrict_parts else np.full(nt, -1, dtype=np.int64)
+        sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
+        tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
     # --- staged least squares
     for lam in stages:
         lu = splu((W + lam * DtD + BtB).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
@@ -296,6 +329,11 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
             if len(bidx):
                 C[bidx] = V_tgt[btrees.query(X[bidx], labels[bidx])]
             C[~in_face] = X[~in_face]
+            if symmetric_weight > 0 and len(sidx) and len(tq):
+                has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tlab, tq, area_t, trees.big, cos_max)
+                has[bidx] = False
+                r = symmetric_weight * np.minimum(a[has] / area_s[has], 4.0)[:, None]
+                C[has] = (C[has] + r * M[has]) / (1.0 + r)
             n_edge = N[E[:, 0]] + N[E[:, 1]]
             n_edge /= np.maximum(np.linalg.norm(n_edge, axis=1, keepdims=True), 1e-12)
             rhs = w[:, None] * C + lam * (D.T @ _rotate(n_edge_src, n_edge, edge_src)) + BtQ

@@ -31,6 +31,7 @@ from .orient import detect_frame
 from .place import resolve_mesh
 from .rig import Rig
 from .tps import ThinPlateSpline
+from .weights import prune_weights
 
 log = logging.getLogger("autobones")
 
@@ -150,7 +151,7 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
     fields = {"__weights__": generic.weights, **generic.fields}
     out, reliable = transfer_fields(P, generic.faces, fields, V, F, source_reliable=ok)
     W = np.clip(out.pop("__weights__"), 0.0, None)
-    W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
+    W = prune_weights(W / np.maximum(W.sum(axis=1, keepdims=True), 1e-300))  # inpainting leaves faint tails
     W = bind_eyeballs(V, F, W, skeleton, generic, under)
     lap("attributes")
 

@@ -57,6 +57,22 @@ def segment_distances(P, segments):
     return out
 
 
+def prune_weights(W, fraction=0.01):
+    """Zero the weights below ``fraction`` of each row's largest, renormalise the rest.
+
+    Parameters
+    ----------
+    W : (n, b) float
+        Non-negative weights, rows summing to 1.
+
+    Returns
+    -------
+    (n, b) float, rows summing to 1.
+    """
+    W = np.where(W < fraction * W.max(axis=1, keepdims=True), 0.0, W)
+    return W / W.sum(axis=1, keepdims=True)
+
+
 def weld(V, F, tol):
     """Merge vertices closer than ``tol`` (by rounding to a grid of that size).
 
@@ -127,8 +143,7 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     Wu = np.clip(Wu, 0.0, None)
     Wu /= np.maximum(Wu.sum(axis=1, keepdims=True), 1e-300)
     if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp
-        Wu[Wu < prune * Wu.max(axis=1, keepdims=True)] = 0.0
-        Wu /= Wu.sum(axis=1, keepdims=True)
+        Wu = prune_weights(Wu, prune)
 
     Ww = np.empty((len(Vw), len(segments)))
     Ww[used] = Wu
