@@ -8,6 +8,7 @@ is only the starting point; the source vertices ``x`` are then moved by
 repeated linear least squares (seed 000 eq. 5.4)::
 
     E(x) = sum_i w_i ||x_i - c_i||^2                         (distance, 5.2)
+         + sum_i r_i ||x_i - m_i||^2                          (reverse distance)
          + lam * sum_(i,j) ||(x_i - x_j) - s R_ij (v_i - v_j)||^2   (shape)
          + mu  * sum_(b in boundary) ||x_b - c_b||^2         (binding, 5.6)
          + nu  * sum_l ||B_l x - q_l||^2                      (constraints, 5.7)
@@ -15,6 +16,19 @@ repeated linear least squares (seed 000 eq. 5.4)::
 - ``c_i``: closest point of the target to ``x_i`` (point-to-plane at the
   nearest target vertex during the iterations), dropped (``c_i = x_i``) when
   the normals differ by more than ``max_angle`` or the distance is an outlier;
+- the reverse term is seed 000's own direction of eq. 5.2 (scan point to
+  its closest point of the mesh, Amberg's symmetric data term): every target
+  vertex is matched to its nearest source vertex of the same part (same
+  rejections), ``m_i`` is the area-weighted centroid of the target vertices
+  matched to ``x_i`` -- the centroid of the piece of target surface closest to
+  it -- and ``r_i = symmetric_weight * min(area received / own area, 4)``.
+  The forward term only pulls along the normal; this one also pulls
+  tangentially, so the sides and back of the head, the ears and the neck
+  spread over the target instead of keeping the TPS's tangential error
+  (ICT, 27 landmarks: mean error 0.78 % -> 0.41 %, p95 3.34 % -> 2.71 %).
+  It is area- not sample-weighted, so a scan's sampling density does not
+  pull the mesh; to keep the matrix constant it is folded into the target
+  of the forward term, ``c_i <- (c_i + r_i m_i) / (1 + r_i)``;
 - the shape term keeps every source edge ``v_i - v_j`` at its source length
   times the landmark scale ``s``, turned by the rotation ``R_ij`` of the local
   normal. It is seed 000's smoothness term (a vertex near its neighbours'
@@ -216,6 +230,10 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         Reference edge vectors of the shape term: the source's own edges
         times the landmark scale (default; more accurate on ICT), or the
         TPS-warped edges (keeps an anisotropic or sheared landmark warp).
+    symmetric_weight : float
+        Weight of the reverse (target -> source) distance term relative to the
+        forward one, for a source vertex receiving its own area of target
+        surface; 0 turns it off.
     timings : dict, optional
         Filled with seconds per step: ``tps``, ``setup``, ``fit``.
 
