@@ -201,7 +201,8 @@ def _under_skin(V, F, P, partner, max_depth):
     return P
 
 
-def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_depth=0.02, **kwargs):
+def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_depth=0.02, max_points=8000,
+                 **kwargs):
     """Place facial bones on the facial mask of a canonical head.
 
     Parameters
@@ -218,6 +219,8 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_dept
         Length of each bone (head sizes), pointing along the cluster's mean normal.
     max_depth : float
         A centroid deeper than this under the skin (head sizes) is moved up to it.
+    max_points : int
+        Masks with more vertices are clustered on an area-weighted sample of this size.
 
     Returns
     -------
@@ -227,10 +230,20 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_dept
         The fitted estimator (labels of the mask vertices, partners, inertia).
     """
     idx = np.flatnonzero(mask)
+    area = vertex_areas(V, F)
     model = FacialBones(n_bones=n_bones, random_state=random_state, **kwargs)
-    model.fit(V[idx], sample_weight=vertex_areas(V, F)[idx])
+    if len(idx) > max_points:
+        # a dense scan: cluster a sample drawn by area (the same objective, estimated), then
+        # label every mask vertex by its nearest centre
+        rng = np.random.default_rng(random_state)
+        p = area[idx] / area[idx].sum()
+        sub = np.sort(rng.choice(idx, size=max_points, replace=False, p=p))
+        model.fit(V[sub])
+        model.labels_ = _nearest(V[idx], model.cluster_centers_)
+    else:
+        model.fit(V[idx], sample_weight=area[idx])
     heads = _under_skin(V, F, model.cluster_centers_, model.partner_, max_depth)
-    N = vertex_normals(V, F)[idx] * vertex_areas(V, F)[idx, None]
+    N = vertex_normals(V, F)[idx] * area[idx, None]
     dirs = np.stack([np.bincount(model.labels_, weights=N[:, j], minlength=n_bones) for j in range(3)], axis=1)
     if model.symmetric:
         dirs = dirs + dirs[model.partner_] * MIRROR

@@ -156,11 +156,11 @@ def detect_frame(V, F, up=None, front=None, reference=None):
 
     if len(candidates) > 1 and up_v is None:
         # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
-        bases = {}
+        bases, cues = {}, _cut_cues(V, F)
         for u, _ in candidates:
             key = tuple(np.round(u, 6))
             if key not in bases:
-                bases[key] = _base_score(V, F, u)
+                bases[key] = _base_score(cues, u)
         ranked = sorted(bases.values(), reverse=True)
         if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1]:
             winner = max(bases, key=bases.get)
@@ -204,35 +204,37 @@ def _candidates(normal, up_v, front_v):
     return out
 
 
-def _base_score(V, F, up):
-    """How strongly the mesh's lowest tenth along ``up`` looks like a cut: flat area facing
-    down plus open boundary rim, relative to the whole surface."""
+def _cut_cues(V, F):
+    """What a cut looks like, computed once: face centroids, unit normals and areas, and the
+    open rim (edges with one face, after welding by position so unwelded meshes have none
+    spurious) as midpoints and lengths."""
+    from .weights import weld
+
     T = V[F]
     cross = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
     area2 = np.linalg.norm(cross, axis=1)
-    ok = area2 > 0
-    normal = np.zeros_like(cross)
-    normal[ok] = cross[ok] / area2[ok, None]
-    h_v = V @ up
-    lo, hi = h_v[F].min(), h_v[F].max()
-    h = (T.mean(axis=1) @ up - lo) / (hi - lo)
-    bottom = h < 0.1
-    flat = (normal @ -up) > np.cos(np.radians(20))
-    flat_part = area2[bottom & flat].sum() / area2.sum()
-    # open rim: edges used by one face only, welded by position so unwelded meshes have none spurious
-    _, inverse = np.unique(np.round(V / (hi - lo), 7), axis=0, return_inverse=True)
-    Fw = inverse.reshape(-1)[F]
+    normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
+    Vw, Fw, _ = weld(V, F, 1e-7 * np.ptp(V[F].reshape(-1, 3), axis=0).max())
     E = np.sort(np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]]), axis=1)
-    E = E[E[:, 0] != E[:, 1]]
-    uniq, count = np.unique(E, axis=0, return_counts=True)
-    rim = uniq[count == 1]
-    if len(rim) == 0:
-        return float(flat_part)
-    Vw = np.zeros((inverse.max() + 1, 3))
-    Vw[inverse.reshape(-1)] = V
-    mid_h = ((Vw[rim[:, 0]] + Vw[rim[:, 1]]) * 0.5 @ up - lo) / (hi - lo)
-    length = np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)
-    rim_part = length[mid_h < 0.1].sum() / np.sqrt(area2.sum() / 2)
+    key = E[:, 0] * len(Vw) + E[:, 1]
+    uniq, count = np.unique(key, return_counts=True)
+    rim = np.column_stack([uniq[count == 1] // len(Vw), uniq[count == 1] % len(Vw)])
+    return {"centroid": T.mean(axis=1), "normal": normal, "area2": area2, "heights": V[np.unique(F)],
+            "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
+            "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
+
+
+def _base_score(cues, up):
+    """How strongly the mesh's lowest tenth along ``up`` looks like a cut: flat area facing
+    down plus open boundary rim, relative to the whole surface."""
+    h_v = cues["heights"] @ up
+    lo, hi = h_v.min(), h_v.max()
+    bottom = (cues["centroid"] @ up - lo) / (hi - lo) < 0.1
+    flat = (cues["normal"] @ -up) > np.cos(np.radians(20))
+    area2 = cues["area2"]
+    flat_part = area2[bottom & flat].sum() / area2.sum()
+    low_rim = (cues["rim_mid"] @ up - lo) / (hi - lo) < 0.1
+    rim_part = cues["rim_length"][low_rim].sum() / np.sqrt(area2.sum() / 2)
     return float(flat_part + 0.05 * rim_part)
 
 
