@@ -41,7 +41,7 @@ def resolve_mesh(mesh):
     return (*load_mesh(mesh), str(mesh))
 
 
-def place(mesh=None, density="medium", up=None, front=None, random_state=0):
+def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
     """Rig a head: head and neck bones, facial bones, smooth skin weights.
 
     Parameters
@@ -55,6 +55,13 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0):
         Force the input axis pointing up / out of the face (``'+z'``, ``'-x'``...).
     random_state : int
         Seed of the k-means restarts; the same seed gives the same rig.
+    landmarks : str or dict, optional
+        With landmarks, the labelled generic rig (``rig``, default the built-in
+        one) is transferred first (see :func:`autobones.transfer`): its ``neck``,
+        ``head``, ``jaw`` and eye bones and their weights replace the depth-based
+        head and neck bones, the facial mask is the transferred face (not neck,
+        ears or scalp), and each facial bone becomes a child of the jaw or the
+        head, splitting that bone's weight with it by bone heat.
 
     Returns
     -------
@@ -72,6 +79,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0):
         t = now
 
     n_bones = bone_count(density)
+    if landmarks is not None:
+        return _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state)
     V, F, source = resolve_mesh(mesh)
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
@@ -96,3 +105,48 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0):
                timings=timings, segmentation=seg,
                extra={"source": source, "facial_bone_partner": model.partner_.tolist(),
                       "neck_height_canonical": seg.neck_height})
+
+
+def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
+    """``place`` with landmarks: facial bones on top of the transferred neck, head, jaw and eyes."""
+    from .transfer import transfer
+
+    base = transfer(mesh, landmarks, rig=rig, up=up, front=front)
+    t = time.perf_counter()
+    V, F, frame = base.vertices, base.faces, base.frame
+    C = frame.to_canonical(V)
+    region = base.fields.get("region")
+    names = base.extra["field_labels"].get("region", [])
+    mask = base.labels == 0
+    if region is not None:
+        mask &= ~np.isin(region, [names.index(n) for n in ("neck", "ears", "scalp") if n in names])
+    heads, tails, model = facial_bones(C, F, mask, n_bones, random_state=random_state)
+    skel = base.skeleton
+    jaw = skel.names.index("jaw") if "jaw" in skel.names else None
+    head = skel.names.index("head")
+    from scipy.spatial import cKDTree
+
+    _, nearest = cKDTree(C).query(heads)
+    on_jaw = np.zeros(n_bones, bool) if jaw is None else base.weights[nearest, jaw] > 0.5
+    parents = np.where(on_jaw, jaw if jaw is not None else head, head)
+    b0 = len(skel)
+    skel_c = Skeleton(list(skel.names) + [f"face_{i:02d}" for i in range(n_bones)],
+                      np.r_[skel.parents, parents],
+                      np.vstack([frame.to_canonical(skel.heads), heads]),
+                      np.vstack([frame.to_canonical(skel.tails), tails]))
+    W = np.zeros((len(V), len(skel_c)))
+    W[:, :b0] = base.weights
+    for parent in {int(p) for p in parents}:
+        kids = b0 + np.flatnonzero(parents == parent)
+        H = bone_heat_weights(C, F, skel_c.segments[np.r_[parent, kids]])
+        mass = base.weights[:, parent]
+        W[:, parent] = mass * H[:, 0]
+        W[:, kids] = mass[:, None] * H[:, 1:]
+    base.timings["facial+weights"] = time.perf_counter() - t
+    base.skeleton = skel_c.transformed(frame.from_canonical)
+    base.weights = W
+    base.facial_mask = mask
+    base.options.update({"command": "place", "density": density if isinstance(density, str) else int(density),
+                         "facial_bones": n_bones, "random_state": random_state})
+    base.extra["facial_bone_partner"] = model.partner_.tolist()
+    return base

@@ -19,6 +19,8 @@ examples:
   autobones place scan.obj --density dense -o scan.glb
   autobones place scan.ply --density 24           24 facial bones
   autobones place bust.stl --up +z --front -y     when the automatic orientation guesses wrong
+  autobones place head.obj --landmarks head.landmarks.json --density dense
+                                                  transferred neck, head, jaw and eyes + facial bones
 
 output:
   OUT.glb          skinned glTF 2.0: the input vertices unchanged, joints neck, head,
@@ -54,6 +56,23 @@ examples:
 """
 
 
+BATCH_EPILOG = """\
+examples:
+  autobones batch heads/ -o rigs/ --density dense --jobs 2      place on every mesh, recursively
+  autobones batch heads/ -o rigs/ --transfer                    landmarks NAME.landmarks.json / NAME.pp beside each mesh
+  autobones batch heads/ -o rigs/ --scheduler tcp://scheduler.example:8786    the same, on a Dask cluster
+
+output: OUT/<path relative to INPUT_DIR without extension>.glb, .rig.json, .weights.npz per
+mesh, and OUT/batch_report.json (per file: status ok/failed/skipped, error, timings, options).
+Meshes whose outputs are up to date (newer than the input, same options) are skipped, so an
+interrupted batch is resumed by running it again. Outputs that exist but are out of date are
+overwritten only with --force. The output folder may not overlap the input folder.
+
+exit code: 0 when every file is ok or up to date, 1 when any file failed, 2 for a bad
+command (missing folder, overlapping folders, bad option).
+"""
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="autobones",
@@ -73,6 +92,9 @@ def build_parser():
     p.add_argument("--up", help="input axis that points up: +x -x +y -y +z -z (default: detected)")
     p.add_argument("--front", help="input axis the face looks along (default: detected)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the k-means restarts (default 0)")
+    p.add_argument("--landmarks", help="optional landmark file: transfer the generic rig's neck, head, jaw and "
+                                      "eyes first and place the facial bones on the transferred face")
+    p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")
     _common(p)
 
     t = sub.add_parser(
@@ -102,6 +124,30 @@ def build_parser():
     b.add_argument("--landmarks", required=True, help="the base head's landmark file (names the rig needs: see below)")
     b.add_argument("-o", "--output", required=True, help="output folder (rig.json, mesh.obj, fields.npz)")
     _common(b)
+
+    a = sub.add_parser(
+        "batch", help="rig every mesh in a folder tree (local processes or a Dask cluster), resumably",
+        description="Run `place` (or `transfer`) on every mesh under INPUT_DIR, mirroring its folders in "
+                    "OUT_DIR, on N local processes or a Dask distributed cluster. Each output is written "
+                    "under a temporary name and renamed when complete; a rerun skips what is done.",
+        epilog=BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    a.add_argument("input_dir", metavar="INPUT_DIR", help="folder of meshes (OBJ, PLY, OFF, STL, glTF/GLB), "
+                                                          "searched recursively; hidden files are ignored")
+    a.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder (outside INPUT_DIR)")
+    a.add_argument("--density", default="medium",
+                   help="facial bones for place: sparse (8), medium (16, default), dense (32) or a number")
+    a.add_argument("--transfer", action="store_true",
+                   help="transfer the labelled rig instead of placing bones; needs NAME.landmarks.json "
+                        "(or NAME.pp, .pts, .ljson) beside each NAME.obj")
+    a.add_argument("--rig", metavar="DIR", help="generic rig folder for --transfer (default: the built-in one)")
+    a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
+    a.add_argument("--scheduler", metavar="ADDRESS",
+                   help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "
+                        "the folders must be on a file system every worker sees at the same path")
+    a.add_argument("--force", action="store_true",
+                   help="overwrite outputs that exist but are out of date or made with other options")
+    a.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary table")
+    _common(a)
     return parser
 
 
@@ -116,7 +162,8 @@ def cmd_place(args):
     head = args.head
     out = args.output or _default_out(head)
     t = time.perf_counter()
-    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=args.seed)
+    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=args.seed,
+                          landmarks=args.landmarks, rig=args.rig)
     written = rig.save(out)
     print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
           f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
@@ -154,7 +201,46 @@ def cmd_build_rig(args):
     return 0
 
 
-COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "build-rig": cmd_build_rig}
+def cmd_batch(args):
+    from autobones.batch import make_options, run_batch, summary_table
+
+    options = make_options(transfer=args.transfer, density=args.density, rig=args.rig)
+    show = not args.quiet and sys.stderr.isatty()
+    bar = None
+
+    def start(n_run, n_skip, n_refused):
+        nonlocal bar
+        from tqdm import tqdm
+
+        bar = tqdm(total=n_run, unit="mesh", disable=not show, file=sys.stderr, dynamic_ncols=True,
+                   desc=f"rigging ({n_skip} up to date)" if n_skip else "rigging")
+
+    def result(rec):
+        line = None
+        if rec["status"] == "failed":
+            line = f"autobones batch: {rec['error']}"
+            if args.debug and rec.get("traceback"):
+                line += "\n" + rec["traceback"].rstrip()
+        elif args.verbose and rec["status"] == "ok":
+            line = f"autobones batch: {rec['input']} -> {rec['output']} ({rec['seconds']:.1f} s)"
+        if line:
+            (bar.write if bar is not None else print)(line, file=sys.stderr)
+        if bar is not None and rec["status"] != "skipped" and not rec.get("error_type") == "Refused":
+            bar.update(1)
+
+    try:
+        report = run_batch(args.input_dir, args.output, options, jobs=args.jobs, scheduler=args.scheduler,
+                           force=args.force, on_start=start, on_result=result)
+    finally:
+        if bar is not None:
+            bar.close()
+    if not args.quiet:
+        print(summary_table(report))
+        print(f"report: {os.path.join(args.output, 'batch_report.json')}")
+    return 0 if report["counts"]["failed"] == 0 else 1
+
+
+COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "build-rig": cmd_build_rig, "batch": cmd_batch}
 
 
 def _axis_values(argv):

@@ -161,3 +161,23 @@ def test_cli_transfer_and_build_rig(tmp_path):
                        env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
     assert not (tmp_path / "x.glb").exists()
+
+
+def test_place_with_landmarks_builds_facial_bones_on_the_transferred_rig(transferred):
+    mesh, marks = HEADS["ict"]
+    rig = autobones.place(mesh, density="medium", landmarks=marks)
+    base = transferred("ict")
+    S = rig.skeleton
+    assert S.names[:5] == base.skeleton.names[:5] and len(S) == 5 + 16
+    jaw, head = S.names.index("jaw"), S.names.index("head")
+    kids = {p: np.flatnonzero(S.parents == p) for p in (head, jaw)}
+    assert len(kids[jaw]) >= 1 and len(kids[head]) >= 1
+    np.testing.assert_allclose(rig.weights.sum(axis=1), 1.0, atol=1e-9)
+    # facial bones split their parent's weight: the jaw's whole family keeps the transferred jaw field
+    family = rig.weights[:, jaw] + rig.weights[:, kids[jaw]].sum(axis=1)
+    np.testing.assert_allclose(family, _jaw(base), atol=1e-9)
+    # the jaw's children sit below the mouth, the head's above the chin
+    lm = read_landmarks(marks)
+    C = rig.frame.to_canonical(S.heads)
+    stomion = rig.frame.to_canonical(lm["stomion"][None])[0]
+    assert (C[kids[jaw], 1] < stomion[1] + 0.02).all()
