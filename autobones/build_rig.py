@@ -73,7 +73,6 @@ import os
 import numpy as np
 
 from .errors import AutobonesError
-from .io.landmarks import MIDLINE
 from .labelled_rig import LabelledRig
 from .skeleton import Skeleton
 

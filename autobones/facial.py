@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import AutobonesError
+from .stick import vertex_normals
 
 DENSITIES = {"sparse": 8, "medium": 16, "dense": 32}
 MIRROR = np.array([-1.0, 1.0, 1.0])
@@ -171,16 +172,6 @@ def vertex_areas(V, F):
     """(n,) barycentric area per vertex (a third of each incident triangle's area)."""
     area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
     return np.bincount(F.ravel(), weights=np.repeat(area / 3.0, 3), minlength=len(V))
-
-
-def vertex_normals(V, F):
-    """(n, 3) area-weighted unit vertex normals (zero for unreferenced vertices)."""
-    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    N = np.zeros_like(V)
-    for j in range(3):
-        np.add.at(N, F[:, j], cross)
-    norm = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
 
 
 def _under_skin(V, F, P, partner, max_depth):

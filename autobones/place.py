@@ -15,6 +15,7 @@ from .facial import bone_count, facial_bones
 from .io.mesh import check_mesh, load_mesh
 from .orient import detect_frame
 from .rig import Rig
+from .timing import Stopwatch
 from .segment import segment_head
 from .skeleton import Skeleton
 from .weights import bone_heat_weights
@@ -68,15 +69,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     Rig
         In the input's own frame and units, vertices unchanged.
     """
-    timings = {}
-    t = time.perf_counter()
-
-    def lap(stage):
-        nonlocal t
-        now = time.perf_counter()
-        timings[stage] = now - t
-        log.info("%-8s %.2f s", stage, now - t)
-        t = now
+    watch = Stopwatch()
+    lap, timings = watch.lap, watch.timings
 
     n_bones = bone_count(density)
     if landmarks is not None:

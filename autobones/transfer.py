@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import logging
 import os
-import time
 
 import numpy as np
 
@@ -30,6 +29,7 @@ from .io.landmarks import NAMES, read_landmarks, validate_landmarks
 from .orient import detect_frame
 from .place import resolve_mesh
 from .rig import Rig
+from .timing import Stopwatch
 from .tps import ThinPlateSpline
 from .weights import prune_weights
 
@@ -102,15 +102,8 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
         In the head's frame and units: the rig's skeleton, skin weights, labels,
         fields and muscles on the head's own vertices.
     """
-    timings = {}
-    t = time.perf_counter()
-
-    def lap(stage):
-        nonlocal t
-        now = time.perf_counter()
-        timings[stage] = now - t
-        log.info("%-10s %.2f s", stage, now - t)
-        t = now
+    watch = Stopwatch()
+    lap, timings = watch.lap, watch.timings
 
     V, F, source = resolve_mesh(head)
     generic = load_generic(rig)
