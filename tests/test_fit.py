@@ -32,14 +32,39 @@ def test_fit_beats_tps_plus_stick_on_ict(ict_pair):
     timings = {}
     R, face, bary, ok = dense_correspondence(Vs, F, Vt, F, Ls, Lt, timings=timings)
     e_fit = np.linalg.norm(R - Vt, axis=1) / eye
-    # measured: TPS+STK 0.43 % / 1.21 %, fit 0.31 % / 0.98 % (mean / p95)
-    assert e_fit.mean() < 0.0036
-    assert np.percentile(e_fit, 95) < 0.012
-    assert e_fit.mean() < 0.85 * e_stk.mean()
+    # measured: TPS+STK 0.43 % / 1.21 %, fit 0.068 % / 0.22 % (mean / p95)
+    assert e_fit.mean() < 0.0010
+    assert np.percentile(e_fit, 95) < 0.0035
+    assert e_fit.mean() < 0.3 * e_stk.mean()
     # the result is on the target surface, as barycentric coordinates say
     np.testing.assert_allclose(np.einsum("ij,ijk->ik", bary, Vt[F[face]]), R, atol=1e-8)
     assert ok.mean() > 0.9
     assert set(timings) == {"tps", "setup", "fit", "stick"}
+
+
+def test_full_resolution_only(ict_pair):
+    Vs, Vt, F, Ls, Lt, eye = ict_pair
+    R = dense_correspondence(Vs, F, Vt, F, Ls, Lt, coarse_vertices=None)[0]
+    e = np.linalg.norm(R - Vt, axis=1) / eye
+    # measured: 0.126 % / 0.71 % (mean / p95)
+    assert e.mean() < 0.0017
+    assert np.percentile(e, 95) < 0.009
+
+
+def test_target_with_another_vertex_layout(ict_pair):
+    """The target remeshed (Loop-subdivided, then decimated back): no shared triangulation to lock onto."""
+    import fast_simplification
+    import trimesh
+
+    Vs, Vt, F, Ls, Lt, eye = ict_pair
+    V2, F2 = trimesh.remesh.subdivide_loop(Vt, F, iterations=1)
+    Vr, Fr = fast_simplification.simplify(V2.astype(np.float32), F2.astype(np.int32), target_count=len(F))
+    R = dense_correspondence(Vs, F, Vr.astype(np.float64), Fr.astype(np.int64), Ls, Lt)[0]
+    e = np.linalg.norm(R - Vt, axis=1) / eye
+    # measured: TPS+STK 0.47 % / 1.24 %, fit 0.48 % / 1.18 % (an easy pair; pooled over 12 pairs the fit
+    # halves the error, see benchmarks/correspondence.py --remeshed)
+    assert e.mean() < 0.0060
+    assert np.percentile(e, 95) < 0.015
 
 
 def test_parts_stay_on_their_parts(ict_pair):
