@@ -427,7 +427,7 @@ def run_dask(address, fn, argsets, on_result, paths=()):
     except ImportError:
         raise AutobonesError("--scheduler needs Dask distributed: pip install 'autobones[dask]'") from None
     try:
-        client = Client(address, timeout="20s")
+        client = Client(address)  # connect timeout: Dask config distributed.comm.timeouts.connect
     except (OSError, TimeoutError, ValueError) as exc:
         raise AutobonesError(f"cannot connect to the Dask scheduler at {address} ({type(exc).__name__}: {exc})") from None
     try:
@@ -505,7 +505,7 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
                          "reason": it.reason if status == "skipped" else None,
                          "seconds": 0.0, "timings": {}, "options_hash": h}
             if on_result:
-                on_result(_public(it.record, inp, out))
+                on_result(_public(it.record, inp, out, options))
 
     def done(i, record):
         record = dict(record)
@@ -513,7 +513,7 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
             record["reason"] = to_run[i].reason
         to_run[i].record = record
         if on_result:
-            on_result(_public(record, inp, out))
+            on_result(_public(record, inp, out, options))
 
     argsets = [(it.input, it.output, options) for it in to_run]
     if scheduler:
@@ -530,7 +530,7 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
         "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "seconds": round(time.perf_counter() - t0, 3),
         "counts": {s: sum(it.record.get("status") == s for it in items) for s in STATUSES},
-        "files": [_public(it.record, inp, out) for it in items],
+        "files": [_public(it.record, inp, out, options) for it in items],
     }
     write_report(os.path.join(out, REPORT_NAME), report)
     return report
@@ -542,9 +542,10 @@ def _version():
     return __version__
 
 
-def _public(record, inp, out):
+def _public(record, inp, out, options):
     """A record as the report shows it: paths relative to the folders, error naming the file."""
     rec = dict(record)
+    rec.setdefault("options", options)
     rel_in = os.path.relpath(record["input"], inp).replace(os.sep, "/")
     rec["input"] = rel_in
     rec["output"] = os.path.relpath(record["output"], out).replace(os.sep, "/")
@@ -553,7 +554,7 @@ def _public(record, inp, out):
     rec.pop("pid", None)
     err = rec.get("error")
     if err:
-        err = err.replace(record["input"], rel_in)
+        err = err.replace(record["input"], rel_in).replace(inp + os.sep, "")
         base = os.path.basename(record["input"])
         if err.startswith(base + ":") and not err.startswith(rel_in):
             err = rel_in + err[len(base):]
