@@ -210,9 +210,13 @@ def cmd_batch(args):
 
     def start(n_run, n_skip, n_refused):
         nonlocal bar
+        import shutil
+
         from tqdm import tqdm
 
-        bar = tqdm(total=n_run, unit="mesh", disable=not show, file=sys.stderr, dynamic_ncols=True,
+        size = shutil.get_terminal_size((100, 24))  # a terminal of unknown size reports 0 x 0: tqdm would hide the bar
+        bar = tqdm(total=n_run, unit="mesh", disable=not show, file=sys.stderr, ncols=min(size.columns, 120),
+                   nrows=max(size.lines, 2),
                    desc=f"rigging ({n_skip} up to date)" if n_skip else "rigging")
 
     def result(rec):

@@ -486,3 +486,32 @@ def _read_lm(path, blob):
     assert lm and set(lm) <= set(NAMES)
     for p in lm.values():
         assert np.asarray(p).shape == (3,) and np.isfinite(p).all()
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_progress_bar_on_a_terminal_only(tmp_path, quiet):
+    import pty
+
+    copy("misc/robot_head_neutral.obj", tmp_path / "in" / "a.obj")
+    args = CLI + ["batch", str(tmp_path / "in"), "-o", str(tmp_path / "out"), "--density", "sparse"] + (["-q"] if quiet else [])
+    master, slave = pty.openpty()  # stderr a terminal (of unknown size, 0 x 0), stdout a pipe
+    proc = subprocess.Popen(args, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), stdin=slave,
+                            stdout=subprocess.PIPE, stderr=slave)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    os.close(master)
+    stdout = proc.stdout.read().decode()
+    assert proc.wait() == 0
+    err = b"".join(chunks).decode("utf-8", "replace")
+    assert ("1/1" in err and "mesh/s" in err) != quiet, err
+    assert ("ok" in stdout) != quiet
+    r = run(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "out2"), "--density", "sparse"])
+    assert r.returncode == 0 and "mesh/s" not in r.stderr  # not a terminal: no bar
