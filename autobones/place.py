@@ -7,6 +7,7 @@ All geometry runs in the canonical frame; results go back to the input frame.
 from __future__ import annotations
 
 import logging
+import os
 import time
 
 import numpy as np
@@ -31,15 +32,16 @@ def default_head():
 
 
 def resolve_mesh(mesh):
-    """A path, a ``(V, F)`` pair, or None (the default head) -> (V, F, source name)."""
+    """A path, a ``(V, F)`` pair, or None (the default head) -> (V, F, source file name)."""
     if mesh is None:
         from generic_rig import default_head_path
 
-        return (*default_head(), default_head_path())
+        return (*default_head(), os.path.basename(default_head_path()))
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         V, F = check_mesh(*mesh)
         return V, F, None
-    return (*load_mesh(mesh), str(mesh))
+    # the file name only: a sidecar must not change when the folder moves (batch, clusters)
+    return (*load_mesh(mesh), os.path.basename(os.fspath(mesh)))
 
 
 def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
