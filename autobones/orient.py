@@ -316,3 +316,58 @@ def default_reference():
     P /= np.sqrt((P ** 2).sum(axis=1).mean())
     P.setflags(write=False)
     return P
+
+
+TOP = ("vertex", "glabella", "nasion")
+BOTTOM = ("menton", "pogonion", "labiale_inferius", "stomion", "subnasale")
+FRONT = ("pronasale", "nasion", "stomion", "subnasale", "glabella")
+
+
+def frame_from_landmarks(V, F, landmarks):
+    """The canonical frame from landmarks, when they tell it: up from a top midline landmark
+    to a bottom one, front from the mesh's centroid to the nose (or another front midline
+    landmark), left completing the frame; the symmetry plane through the midline landmarks
+    and the midpoints of the bilateral pairs.
+
+    Left is derived without the bilateral names, so a set with left and right swapped is
+    caught by :func:`autobones.io.landmarks.validate_landmarks`. Returns None when the
+    landmarks lack a top, a bottom or a front point (use :func:`detect_frame` then).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertices, input frame.
+    F : (m, 3) int
+        Triangles.
+    landmarks : dict of str -> (3,)
+        Contract landmarks in the input frame.
+
+    Returns
+    -------
+    Frame or None
+    """
+    pick = lambda names: next((np.asarray(landmarks[n], float) for n in names if n in landmarks), None)
+    top, bottom, nose = pick(TOP), pick(BOTTOM), pick(FRONT)
+    if top is None or bottom is None or nose is None:
+        return None
+    used = np.unique(F)
+    centroid = V[used].mean(axis=0)
+    up = top - bottom
+    front = nose - centroid
+    if np.linalg.norm(up) == 0 or np.linalg.norm(front) == 0:
+        return None
+    up /= np.linalg.norm(up)
+    front -= (front @ up) * up
+    if np.linalg.norm(front) < 1e-6 * np.ptp(V[used], axis=0).max():
+        return None
+    front /= np.linalg.norm(front)
+    left = np.cross(up, front)
+    R = np.vstack([left, up, front])
+    # the symmetry plane passes through midline points and pair midpoints
+    mids = [np.asarray(p, float) for n, p in landmarks.items() if not n.endswith(("_l", "_r"))]
+    mids += [(np.asarray(landmarks[n], float) + np.asarray(landmarks[n[:-2] + "_r"], float)) / 2
+             for n in landmarks if n.endswith("_l") and n[:-2] + "_r" in landmarks]
+    x0 = float(np.median(np.array(mids) @ left))
+    origin = centroid - (centroid @ left - x0) * left
+    local = (V[used] - origin) @ R.T
+    return Frame(rotation=R, origin=origin, size=float(np.ptp(local, axis=0).max()))

@@ -26,7 +26,7 @@ from .attributes import transfer_fields
 from .errors import AutobonesError
 from .fit import dense_correspondence
 from .io.landmarks import NAMES, read_landmarks, validate_landmarks
-from .orient import detect_frame
+from .orient import detect_frame, frame_from_landmarks
 from .place import resolve_mesh
 from .rig import Rig
 from .timing import Stopwatch
@@ -108,9 +108,11 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
     V, F, source = resolve_mesh(head)
     generic = load_generic(rig)
     lap("load")
-    frame = detect_frame(V, F, up=up, front=front)
     where = landmarks if isinstance(landmarks, (str, os.PathLike)) else "landmarks"
     lm = read_landmarks(landmarks) if isinstance(landmarks, (str, os.PathLike)) else dict(landmarks)
+    # the landmarks give the frame directly (and much faster) unless the user overrides an axis
+    frame = None if up or front else frame_from_landmarks(V, F, lm)
+    frame = frame or detect_frame(V, F, up=up, front=front)
     lm = validate_landmarks(lm, V, F, frame=frame, min_count=MIN_LANDMARKS, source=str(where))
     shared = [n for n in NAMES if n in lm and n in generic.landmarks]
     if len(shared) < MIN_LANDMARKS:

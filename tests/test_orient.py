@@ -96,3 +96,19 @@ def test_bad_overrides_are_clear_errors(up, front):
 def test_parse_axis():
     np.testing.assert_array_equal(parse_axis("-Z"), [0, 0, -1])
     np.testing.assert_array_equal(parse_axis("x"), [1, 0, 0])
+
+
+@pytest.mark.parametrize("rel", ["ict/identity001.obj", "menpo3d/james.obj", "menpo3d/template.ply"])
+def test_frame_from_landmarks_agrees_with_the_head(rel):
+    import json
+
+    from autobones.orient import frame_from_landmarks
+
+    V, F = load_mesh(data(rel))
+    lm = {k: np.array(v) for k, v in json.load(open(str(data(rel)).rsplit(".", 1)[0] + ".landmarks.json"))["landmarks"].items()}
+    frame = frame_from_landmarks(V, F, lm)
+    assert (frame.up, frame.front) == ("+y", "+z")
+    # left is +X and the bilateral pairs sit on their own side
+    C = frame.to_canonical(np.array([lm["exocanthion_l"], lm["exocanthion_r"]]))
+    assert C[0, 0] > 0 > C[1, 0] and abs(C[0, 0] + C[1, 0]) < 0.02
+    assert frame_from_landmarks(V, F, {"exocanthion_l": lm["exocanthion_l"]}) is None
