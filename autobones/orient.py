@@ -10,10 +10,14 @@ Method
    mirror image; the pair differences give the normal, their midpoints the
    offset). The plane that mirrors the sample onto itself best wins.
 2. Up and front: the two remaining input axes, projected into the symmetry
-   plane, give 8 signed (up, front) choices. Each is scored by how well the
-   head, so oriented, overlays a reference head (the built-in default head):
-   a scale-and-translation ICP with trimmed correspondences, no rotation, so
-   every choice is judged as it stands.
+   plane, give 8 signed (up, front) choices. When one direction clearly has a
+   cut at its far end (a flat base or an open rim: neck cut, bust base), it is
+   down. The remaining choices are scored by how well the head's top slice
+   (1.2 head widths tall, so shoulders and bust bases don't count) overlays the
+   same slice of a reference head (the built-in default head): a trimmed
+   similarity ICP that may turn by at most 35 degrees, so a tilted head still
+   matches but a head facing the other way cannot turn round.
+3. With landmarks (``frame_from_landmarks``), the frame comes from them instead.
 
 Every step is a function of the mesh's shape (sample faces and barycentric
 coordinates do not depend on the frame), so a head rotated by any axis-aligned
@@ -93,6 +97,7 @@ class Frame:
 
 
 def nearest_axis(d):
+    """The signed input axis closest to direction ``d`` (3,), e.g. ``'-x'``."""
     d = np.asarray(d, dtype=np.float64)
     i = int(np.argmax(np.abs(d)))
     return ("+" if d[i] > 0 else "-") + "xyz"[i]
@@ -167,7 +172,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
     if len(candidates) > 1:
         ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
-        scores = [_overlay_score(P, center, rms, u, f, ref) for u, f in candidates]
+        scores = [_overlay_score(P, u, f, ref) for u, f in candidates]
         up_d, front_d = candidates[int(np.argmin(scores))]
     else:
         up_d, front_d = candidates[0]
@@ -274,7 +279,7 @@ def _top_part(Q):
     return Q / np.sqrt((Q ** 2).sum(axis=1).mean())
 
 
-def _overlay_score(P, center, rms, up, front, ref, iterations=30, max_turn=35.0):
+def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
     """Trimmed two-way distance between the head oriented as (up, front) and the reference,
     after a similarity ICP that may turn the head by at most ``max_turn`` degrees (a tilted
     or turned head still matches; a head facing the other way cannot turn round)."""
