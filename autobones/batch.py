@@ -28,12 +28,12 @@ import logging
 import os
 import shutil
 import socket
-import tempfile
 import time
 import traceback
 from dataclasses import dataclass, field
 
 from .errors import AutobonesError
+from .io.atomic import write_text_atomic
 from .io.mesh import SUPPORTED
 
 log = logging.getLogger("autobones")
@@ -566,19 +566,7 @@ def _public(record, inp, out, options):
 
 def write_report(path, report):
     """Write the report as JSON through a temporary file renamed into place."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".batch_report-", suffix=".json", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(report, fh, indent=1)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise AutobonesError(f"{path}: cannot write the batch report ({exc.strerror or exc})") from None
+    write_text_atomic(path, json.dumps(report, indent=1) + "\n", "the batch report")
 
 
 def summary_table(report):

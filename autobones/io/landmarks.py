@@ -25,12 +25,12 @@ import json
 import logging
 import os
 import re
-import tempfile
 from collections.abc import Mapping
 
 import numpy as np
 
 from ..errors import AutobonesError
+from .atomic import write_text_atomic
 
 log = logging.getLogger(__name__)
 
@@ -466,20 +466,7 @@ def write_landmarks(path, landmarks, mesh_name=None):
     lines.append("  }")
     lines.append("}")
     text = "\n".join(lines) + "\n"
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
-    fd, tmp = tempfile.mkstemp(prefix=".landmarks-", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise AutobonesError(f"{path}: cannot write the landmark file ({exc.strerror or exc})") from None
+    write_text_atomic(path, text, "the landmark file")
 
 
 # ---------------------------------------------------------------------------------------------
