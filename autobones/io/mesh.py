@@ -63,7 +63,12 @@ def load_mesh(path):
     except AutobonesError:
         raise
     except Exception as exc:  # any parser failure is the file's fault, not ours
-        raise AutobonesError(f"{path}: not a readable {ext[1:].upper()} mesh ({exc.__class__.__name__}: {exc})") from exc
+        text = str(exc)
+        if any(k in text for k in ("unexpected length", "reshape", "buffer is smaller", "truncated")):
+            why = "the file is shorter than its header says: truncated or corrupt"
+        else:
+            why = f"{exc.__class__.__name__}: {text}"
+        raise AutobonesError(f"{path}: not a readable {ext[1:].upper()} mesh ({why})") from exc
     return check_mesh(V, F, name=name)
 
 
