@@ -1,0 +1,366 @@
+"""Can the placed bones express a face?  Issue #4, part 3 of its proof: "bones alone".
+
+Run by hand, not by the tests::
+
+    python benchmarks/expressions.py            # all rigs, all expressions (~30 s)
+    python benchmarks/expressions.py --quick    # sparse and dense only, no rigid variant
+    python benchmarks/expressions.py --sweeps 60  # more rigid block-descent sweeps
+
+Data: ICT-FaceKit (``../shared/data/ict``), a linear model whose neutral head
+``generic_neutral_mesh.obj`` and four real expression shapes (``jawOpen``,
+``mouthSmile_L``, ``eyeBlink_L``, ``browInnerUp_L``) share one vertex list
+(26,719 vertices; ``load_mesh`` keeps the file's order, which is checked).
+
+Rigs: ``autobones.place`` of the neutral head at sparse / medium / dense, and
+dense with the head's landmarks (adds the transferred jaw and eye bones, facial
+bones parented to head or jaw). Plus two references: "neutral" (no motion, 0 %)
+and "global affine" (one bone weighted 1 everywhere).
+
+Fit, weights FIXED: the best per-bone transforms reproducing an expression by
+linear blend skinning, x_i ~ sum_j w_ij (A_j v_i + t_j), A_j a free 3x3 affine,
+t_j a translation (12 unknowns per bone). Each output coordinate c separates:
+x_ic = sum_j w_ij [v_i, 1] . p_jc, an (n x 4b) sparse design matrix solved three
+times through its (4b x 4b) normal equations (``scipy.linalg.lstsq`` on them,
+so bones the data do not pin down get the minimum-norm answer). Coordinates are
+centred and scaled before the solve, for conditioning. Two weight sets:
+
+- "4 infl": ``autobones.io.gltf.top_influences(W, 4)``, the weights as exported;
+- "all": the full ``rig.weights``.
+
+Optional "rigid" variant (skin, 4 influences, A_j a rotation): block coordinate
+descent, each bone in turn solved by weighted Procrustes against what the other
+bones leave, started from the affine fit projected to rotations; ``--sweeps``
+Gauss-Seidel sweeps (never worse than its start, which is checked).
+
+Metric (issue #4): explained = 1 - ||residual|| / ||displacement||, Frobenius
+norms over a vertex set, displacement = expression - neutral, residual =
+fitted - expression; 100 % is exact, 0 % is no better than not moving
+(negative: the fit moves a region more wrongly than leaving it still).
+
+The ICT mesh is 56 connected parts: the skin (the largest, 14,062 vertices:
+face, scalp, ears, neck, mouth and eye sockets) plus teeth, gums, tongue,
+eyeballs and eye-blend shells. Those inner parts carry most of some
+expressions' displacement (jawOpen: 232.6 over all vertices, 129.4 on the
+skin; eyeBlink_L 22.8 vs 8.8) and get bone-heat weights from bones they are not
+attached to. So two fits per row:
+
+- all: fitted and scored over every vertex (the issue's literal wording);
+- skin: fitted and scored over the skin only, and from that same skin fit,
+- lower / upper: the skin's "moved" vertices (||displacement|| > 1 % of that
+  expression's largest on the skin) below / at or above the nose tip (landmark
+  ``pronasale``; the mesh is +Y up). Fewer than 50 moved vertices in a region
+  prints "-".
+
+Lip check: the lips are the skin vertices of region ``lips`` of the transferred
+labelled generic rig (the same on every rig: one mesh) on the outer surface
+(z > cheilion z - 0.7; deeper ones are the mouth socket); upper lip above the
+line stomion -> cheilion (in |x|), lower below, mouth corners (|x| > 0.8 of the
+cheilion's) left out. A lip vertex is "mixed" when a bone other than ``head``
+gives it weight >= 0.2 and also gives weight >= 0.2 to some vertex of the
+other lip (full weights). ``head`` is left out: it is the parent that stays
+still, not a mouth bone.
+
+Self-check before the table: the neutral shape is fitted with zero residual
+(identity transforms), and a rigid motion of the whole head is explained
+>= 99.9 % by every rig and weight set.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import platform
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+import autobones
+from autobones.io.gltf import top_influences
+from autobones.io.mesh import load_mesh
+from autobones.fit import mesh_parts
+
+ICT = Path(__file__).resolve().parents[2] / "shared" / "data" / "ict"
+NEUTRAL = ICT / "generic_neutral_mesh.obj"
+LANDMARKS = ICT / "generic_neutral_mesh.landmarks.json"
+EXPRESSIONS = ["jawOpen", "mouthSmile_L", "eyeBlink_L", "browInnerUp_L"]
+
+
+# ---------------------------------------------------------------- fitting
+class LBSFit:
+    """Least-squares per-bone affine transforms for fixed skin weights.
+
+    ``W`` is (n, b) dense or scipy.sparse; the design matrix row i is
+    ``kron(W[i], [v_i, 1])`` (4b columns), built once with its normal equations.
+    """
+
+    def __init__(self, V, W):
+        self.V = np.asarray(V, float)
+        self.c = self.V.mean(axis=0)
+        self.s = np.abs(self.V - self.c).max()
+        Vh = np.c_[(self.V - self.c) / self.s, np.ones(len(V))]  # (n, 4)
+        W = sp.csr_matrix(W)
+        W.eliminate_zeros()
+        n, b = W.shape
+        rows = np.repeat(np.arange(n), np.diff(W.indptr))
+        cols, vals = W.indices, W.data
+        # each weight becomes 4 entries: w * [x, y, z, 1] in columns 4j..4j+3
+        R = np.repeat(rows, 4)
+        C = (4 * np.repeat(cols, 4) + np.tile(np.arange(4), len(cols)))
+        D = (vals[:, None] * Vh[rows]).ravel()
+        self.M = sp.csr_matrix((D, (R, C)), shape=(n, 4 * b))
+        self.G = (self.M.T @ self.M).toarray()
+        self.b = b
+
+    def fit(self, X):
+        """Fitted positions (n, 3) and the parameters P (4b, 3), scaled frame."""
+        Y = (np.asarray(X, float) - self.c) / self.s
+        P = scipy.linalg.lstsq(self.G, self.M.T @ Y, lapack_driver="gelsy", cond=1e-13)[0]
+        return self.unscale(self.M @ P), P
+
+    def unscale(self, Y):
+        return Y * self.s + self.c
+
+    def affines(self, P):
+        """(b, 3, 3) linear parts and (b, 3) translations in the scaled frame."""
+        Pb = P.reshape(self.b, 4, 3)
+        return np.transpose(Pb[:, :3, :], (0, 2, 1)), Pb[:, 3, :]
+
+
+def _nearest_rotation(A):
+    U, _, Vt = np.linalg.svd(A)
+    d = np.sign(np.linalg.det(U @ Vt))
+    return U @ np.diag([1.0, 1.0, d]) @ Vt
+
+
+def fit_rigid(fit, W, X, sweeps=30):
+    """Rigid per bone: block coordinate descent over bones, weighted Procrustes each.
+
+    Minimises sum_i ||y_i - sum_j w_ij (R_j v_i + t_j)||^2 (scaled frame).
+    Starts from the affine fit's linear parts projected to rotations (translations
+    refitted by the first sweep). Returns fitted positions (n, 3), input frame.
+    """
+    W = sp.csc_matrix(W)
+    V = (fit.V - fit.c) / fit.s
+    Y = (np.asarray(X, float) - fit.c) / fit.s
+    A, t = fit.affines(fit.fit(X)[1])
+    Rs = np.array([_nearest_rotation(a) for a in A])
+    ts = t.copy()
+    cols = [(W.indices[W.indptr[j]:W.indptr[j + 1]], W.data[W.indptr[j]:W.indptr[j + 1]]) for j in range(W.shape[1])]
+
+    def model():
+        out = np.zeros_like(V)
+        for j, (idx, w) in enumerate(cols):
+            out[idx] += w[:, None] * (V[idx] @ Rs[j].T + ts[j])
+        return out
+
+    F = model()
+    for _ in range(sweeps):
+        for j, (idx, w) in enumerate(cols):
+            if len(idx) < 3:
+                continue
+            own = w[:, None] * (V[idx] @ Rs[j].T + ts[j])
+            r = Y[idx] - (F[idx] - own)          # what bone j should supply: w_i (R v_i + t)
+            w2 = w * w
+            sw2 = w2.sum()
+            vbar = (w2[:, None] * V[idx]).sum(0) / sw2
+            qbar = (w[:, None] * r).sum(0) / sw2  # weighted mean of r_i / w_i
+            H = (V[idx] - vbar).T @ (w[:, None] * r - w2[:, None] * qbar)
+            U, _, Vt = np.linalg.svd(H)
+            d = np.sign(np.linalg.det(Vt.T @ U.T))
+            R = Vt.T @ np.diag([1.0, 1.0, d]) @ U.T
+            Rs[j], ts[j] = R, qbar - R @ vbar
+            F[idx] += w[:, None] * (V[idx] @ R.T + ts[j]) - own
+    return fit.unscale(model())
+
+
+def explained(fitted, X, V, sel=None):
+    """1 - ||fitted - X|| / ||X - V|| over the vertices ``sel`` (all if None); nan if nothing moves."""
+    if sel is not None:
+        fitted, X, V = fitted[sel], X[sel], V[sel]
+    d = np.linalg.norm(X - V)
+    return np.nan if d == 0 else 1.0 - np.linalg.norm(fitted - X) / d
+
+
+# ---------------------------------------------------------------- rigs
+def sparse_top4(W):
+    J, w = top_influences(W, 4)
+    n = len(W)
+    M = sp.csr_matrix((w.astype(np.float64).ravel(), (np.repeat(np.arange(n), J.shape[1]), J.ravel())), shape=W.shape)
+    M.sum_duplicates()  # unused slots are (joint 0, weight 0)
+    return M
+
+
+def lips(V, lm, region_field, region_names, skin):
+    """Boolean masks (upper lip, lower lip) on the neutral head."""
+    on = (region_field == region_names.index("lips")) & skin & (V[:, 2] > lm["cheilion_l"][2] - 0.7)
+    st, ch = np.asarray(lm["stomion"]), np.asarray(lm["cheilion_l"])
+    ax = np.abs(V[:, 0])
+    line = st[1] + (ch[1] - st[1]) * np.clip(ax / ch[0], 0, 1)
+    inner = on & (ax < 0.8 * ch[0])
+    return inner & (V[:, 1] > line), inner & (V[:, 1] <= line)
+
+
+def lip_mixing(W, names, up, lo, thr=0.2):
+    """Lip vertices carrying >= thr of a non-head bone that also weights the other lip >= thr."""
+    W = np.asarray(W)
+    big = W >= thr
+    span = big[up].any(axis=0) & big[lo].any(axis=0)
+    if "head" in names:
+        span[names.index("head")] = False
+    mixed = big[:, span].any(axis=1)
+    return int((mixed & up).sum()), int((mixed & lo).sum()), [names[j] for j in np.flatnonzero(span)]
+
+
+def machine():
+    cpu = platform.processor() or ""
+    try:
+        for line in subprocess.run(["lscpu"], capture_output=True, text=True).stdout.splitlines():
+            if line.startswith("Model name"):
+                cpu = line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    import os
+
+    return f"{platform.system()} {platform.machine()}, {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def fmt(x):
+    return "-" if np.isnan(x) else f"{100 * x:.1f}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
+    ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
+    args = ap.parse_args()
+    sweeps = 0 if args.quick else args.sweeps
+
+    V, F = load_mesh(NEUTRAL)
+    shapes = {}
+    for e in EXPRESSIONS:
+        X, Fe = load_mesh(ICT / f"{e}.obj")
+        assert X.shape == V.shape and np.array_equal(Fe, F), f"{e}: not the neutral's vertex list"
+        shapes[e] = X
+    lm = json.loads(LANDMARKS.read_text())["landmarks"]
+    nose_y = lm["pronasale"][1]
+
+    specs = [("sparse", "sparse", None), ("medium", "medium", None), ("dense", "dense", None),
+             ("dense + landmarks", "dense", str(LANDMARKS))]
+    if args.quick:
+        specs = [specs[0], specs[2], specs[3]]
+    rigs = {}
+    for label, density, landmarks in specs:
+        t = time.perf_counter()
+        rig = autobones.place(str(NEUTRAL), density=density, landmarks=landmarks)
+        assert np.allclose(rig.vertices, V), "place must keep the vertices"
+        rigs[label] = rig
+        print(f"placed {label}: {len(rig.skeleton)} bones in {time.perf_counter() - t:.1f} s", flush=True)
+    ref = rigs["dense + landmarks"]
+    parts = mesh_parts(len(V), F)
+    skin = parts == np.argmax(np.bincount(parts))
+    up_lip, lo_lip = lips(V, lm, ref.fields["region"], ref.extra["field_labels"]["region"], skin)
+
+    # weight sets per rig; "global affine" is one bone with weight 1
+    entries = [("global affine", 1, {"all": np.ones((len(V), 1))}, ["root"])]
+    for label, rig in rigs.items():
+        entries.append((label, len(rig.skeleton), {"4 infl": sparse_top4(rig.weights), "all": rig.weights},
+                        list(rig.skeleton.names)))
+
+    # ---- self-check
+    ang = np.deg2rad(12.0)
+    Rx = np.array([[1, 0, 0], [0, np.cos(ang), -np.sin(ang)], [0, np.sin(ang), np.cos(ang)]])
+    Ry = np.array([[np.cos(ang / 2), 0, np.sin(ang / 2)], [0, 1, 0], [-np.sin(ang / 2), 0, np.cos(ang / 2)]])
+    Xrig = (V - V.mean(0)) @ (Ry @ Rx).T + V.mean(0) + np.array([0.7, -1.3, 2.1])
+    fits = {}
+    for label, b, wsets, names in entries:
+        for kind, W in wsets.items():
+            Ws = sp.csr_matrix(W)[np.flatnonzero(skin)]
+            for where, fit, sel in [("all", LBSFit(V, W), slice(None)), ("skin", LBSFit(V[skin], Ws), skin)]:
+                fits[label, kind, where] = (fit, Ws if where == "skin" else W)
+                Y0, _ = fit.fit(V[sel])
+                err0 = np.abs(Y0 - V[sel]).max()
+                # 4 infl: float32 weights sum to 1 only to float32 rounding (~1e-7 of the head size)
+                assert err0 < 1e-6 * fit.s, f"{label}/{kind}/{where}: neutral fit residual {err0:.3g}"
+                e = explained(fit.fit(Xrig[sel])[0], Xrig[sel], V[sel])
+                assert e >= 0.999, f"{label}/{kind}/{where}: rigid head motion explained {100 * e:.3f} %"
+    print("self-check passed: neutral residual 0, rigid head motion >= 99.9 % on every rig and weight set\n")
+
+    # ---- the table
+    Vs = V[skin]
+    sk = {e: X[skin] for e, X in shapes.items()}
+    lower, upper = {}, {}
+    for e, X in sk.items():
+        d = np.linalg.norm(X - Vs, axis=1)
+        moved = d > 0.01 * d.max()
+        lower[e] = moved & (Vs[:, 1] < nose_y)
+        upper[e] = moved & (Vs[:, 1] >= nose_y)
+    hdr = ("| rig | bones | expression | all weights: all / skin / lower / upper | 4 infl: all / skin / lower / upper |"
+           + (" rigid 4 infl: skin |" if sweeps else ""))
+    lines = [hdr, "|" + "---|" * (hdr.count("|") - 1)]
+    summary = {}
+
+    def region(fitted, e, sel):
+        return explained(fitted, sk[e], Vs, sel) if sel.sum() >= 50 else np.nan
+
+    def scores(label, kind, e):
+        if label is None:  # neutral: no motion
+            fa, fs = V, Vs
+        else:
+            fa = fits[label, kind, "all"][0].fit(shapes[e])[0]
+            fs = fits[label, kind, "skin"][0].fit(sk[e])[0]
+        return (explained(fa, shapes[e], V), explained(fs, sk[e], Vs),
+                region(fs, e, lower[e]), region(fs, e, upper[e]))
+
+    for e in EXPRESSIONS:
+        z = " / ".join(map(fmt, scores(None, None, e)))
+        lines.append(f"| neutral | 0 | {e} | {z} | {z} |" + (" 0.0 |" if sweeps else ""))
+    t_fit = time.perf_counter()
+    for label, b, wsets, names in entries:
+        for e in EXPRESSIONS:
+            row = {kind: scores(label, kind, e) for kind in wsets}
+            rig_col = ""
+            if sweeps:
+                if "4 infl" in wsets:
+                    fit, W = fits[label, "4 infl", "skin"]
+                    Yr = fit_rigid(fit, W, sk[e], sweeps)
+                    start = fit_rigid(fit, W, sk[e], 0)
+                    er = explained(Yr, sk[e], Vs)
+                    assert er >= explained(start, sk[e], Vs) - 1e-9, "rigid descent went up"
+                    rig_col = f" {fmt(er)} |"
+                else:
+                    rig_col = " - |"
+            a = row["all"]
+            f4 = row.get("4 infl", (np.nan,) * 4)
+            summary.setdefault(label, []).append((a[0], a[1], f4[1]))
+            lines.append(f"| {label} | {b} | {e} | {' / '.join(map(fmt, a))} | {' / '.join(map(fmt, f4))} |{rig_col}")
+    t_fit = time.perf_counter() - t_fit
+
+    print("\n".join(lines))
+    print("\nmean over the 4 expressions, explained (all vertices, all weights / skin, all weights / skin, 4 infl):")
+    for label, vals in summary.items():
+        v = np.array(vals)
+        m = [fmt(np.nanmean(v[:, k])) if not np.all(np.isnan(v[:, k])) else "-" for k in range(3)]
+        print(f"  {label:18s} {m[0]:>5s} / {m[1]:>5s} / {m[2]:>5s}   (skin min {fmt(np.nanmin(v[:, 1]))})")
+    print(f"\nskin {skin.sum()} of {len(V)} vertices; moved skin vertices lower / upper face: "
+          + ", ".join(f"{e} {lower[e].sum()}/{upper[e].sum()}" for e in EXPRESSIONS))
+    print(f"lip check: {up_lip.sum()} upper-lip, {lo_lip.sum()} lower-lip vertices; jawOpen mean displacement "
+          f"upper {np.linalg.norm(shapes['jawOpen'] - V, axis=1)[up_lip].mean():.3f}, "
+          f"lower {np.linalg.norm(shapes['jawOpen'] - V, axis=1)[lo_lip].mean():.3f}")
+    for label, rig in rigs.items():
+        mu, ml, span = lip_mixing(rig.weights, list(rig.skeleton.names), up_lip, lo_lip)
+        print(f"  {label:18s} mixed: {mu}/{up_lip.sum()} upper, {ml}/{lo_lip.sum()} lower; "
+              f"bones weighting both lips >= 0.2: {', '.join(span) or 'none'}")
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).parent,
+                                capture_output=True, text=True).stdout.strip()
+    except OSError:
+        commit = "?"
+    print(f"\nfits: {t_fit:.1f} s; {datetime.date.today()}, autobones {commit}, {machine()}")
+
+
+if __name__ == "__main__":
+    main()
