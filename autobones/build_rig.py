@@ -35,7 +35,8 @@ Skin weights (``weights``, also the field ``skin_weights``)
           centroid is within 1.5 cm of an eye centre); skin-only heads have closed
           lids on the default head, so the eye bones rotate eyeballs only and eye
           weights are 0 on the skin.
-    head/neck  the rest (1 - jaw - eye) split by bone heat between the two bones.
+    head/neck  the rest (1 - jaw - eye) split at the neck plane (through 0.8 cm under the menton
+               and the skull base behind), smoothly over 3 cm, then diffused.
 
 Regions (field ``region``, classes in :data:`REGIONS`), first rule that holds wins
     ears     within an ellipse in the side (y, z) plane: height 1.24 ear lengths (superaurale-
@@ -230,11 +231,12 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     eye_any = eye_w["l"] + eye_w["r"]
     jaw = jaw * (1.0 - eye_any)
 
-    from .weights import bone_heat_weights
 
-    hn = bone_heat_weights(Vc, F, np.array([skel_c.segments[0], skel_c.segments[1]]))
+    # neck: the skin below the neck plane, fading over 3 cm across it (bone heat alone gave the
+    # face to the neck bone, whose top sits nearer the lips than the head bone does)
+    neck_w = np.clip(_diffuse(_step(-_above_neck_plane(Vc, L, cm), 0.0, 3.0 * cm), *lap, t=(0.5 * cm) ** 2), 0.0, 1.0)
     rest = 1.0 - jaw - eye_any
-    W = np.column_stack([hn[:, 0] * rest, hn[:, 1] * rest, jaw, eye_w["l"], eye_w["r"]])
+    W = np.column_stack([neck_w * rest, (1.0 - neck_w) * rest, jaw, eye_w["l"], eye_w["r"]])
     W = np.clip(W, 0.0, None)
     W /= W.sum(axis=1, keepdims=True)
 
@@ -290,6 +292,19 @@ def _pull_inside(wn, p, anchor, steps=20):
     Q = anchor + t[:, None] * (p - anchor)
     ok = np.flatnonzero(wn(Q) > 0.5)
     return Q[ok[0]] if len(ok) else p
+
+
+def _above_neck_plane(Vc, L, cm):
+    """Signed distance (canonical units) above the neck plane: the plane containing the x axis
+    through 0.8 cm under the menton and the skull base behind (opisthocranion depth, 2 cm under
+    the tragions)."""
+    tr = 0.5 * (L["tragion_l"] + L["tragion_r"])
+    a = L["menton"] + np.array([0.0, -0.8 * cm, 0.0])
+    b = np.array([0.0, tr[1] - 2.0 * cm, L["opisthocranion"][2]])
+    d = b - a
+    nrm = np.array([0.0, d[2], -d[1]])
+    nrm = (nrm if nrm[1] > 0 else -nrm) / np.linalg.norm(nrm)
+    return (Vc - a) @ nrm
 
 
 def _plane_normal(a, b, c, toward):
@@ -383,12 +398,7 @@ def _regions(Vc, L, cm, jaw, below_mouth, jaw0):
     put((jaw > 0.5) | ((near_go < 1.5 * cm) & (below_mouth > -0.5 * cm)), "jaw")
     # neck: below the plane (containing the x axis) through 0.8 cm under the menton and the
     # skull base behind (opisthocranion depth, head pivot height)
-    a = L["menton"] + np.array([0.0, -0.8 * cm, 0.0])
-    b = np.array([0.0, tr[1] - 2.0 * cm, L["opisthocranion"][2]])
-    d = b - a
-    nrm = np.array([0.0, d[2], -d[1]])
-    nrm = nrm if nrm[1] > 0 else -nrm
-    neck = (Vc - a) @ nrm < 0
+    neck = _above_neck_plane(Vc, L, cm) < 0
     # cheeks: face in front of the ears between the jaw/mouth and the eyes
     put(face_front & (y < lid_top) & (y > L["menton"][1]) & ~neck, "cheeks")
     put(neck, "neck")

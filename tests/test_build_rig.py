@@ -322,3 +322,15 @@ def test_committed_default_rig_is_up_to_date(rig):
     assert back.units == "metres"
     meta = json.loads((GR / "default" / "rig.json").read_text())
     assert len(meta["muscles"]) == 26
+
+
+def test_default_rig_face_belongs_to_head_and_jaw_not_neck():
+    from autobones.labelled_rig import LabelledRig
+    from autobones.transfer import default_rig_path
+
+    rig = LabelledRig.load(default_rig_path())
+    names, region = rig.labels["region"], rig.fields["region"]
+    neck = rig.weights[:, rig.skeleton.names.index("neck")]
+    for face_part in ("lips", "nose", "eyelids", "brow", "cheeks", "forehead"):
+        assert neck[region == names.index(face_part)].max() <= 0.05, face_part
+    assert neck[region == names.index("neck")].mean() >= 0.8
