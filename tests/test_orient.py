@@ -7,6 +7,7 @@ import pytest
 import autobones
 from autobones.errors import AutobonesError
 from autobones.io.mesh import load_mesh
+from autobones.place import default_head
 from autobones.orient import detect_frame, parse_axis
 
 from shared_data import data
@@ -40,7 +41,7 @@ KNOWN = {  # file: (up, front) in the file's own axes, checked by eye on renders
 
 @pytest.mark.parametrize("rel", list(KNOWN), ids=[str(k) for k in KNOWN])
 def test_detects_up_and_front_of_shared_heads(rel):
-    V, F = load_mesh(data(rel)) if rel else autobones.place.__globals__["default_head"]()
+    V, F = load_mesh(data(rel)) if rel else default_head()
     frame = detect_frame(V, F)
     assert (frame.up, frame.front) == KNOWN[rel]
     R = frame.rotation
