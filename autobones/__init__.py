@@ -23,11 +23,11 @@ def build_rig(base, landmarks, **kwargs):
     """A labelled generic rig from a base head (path or (V, F)) and its landmarks (path or dict);
     see :func:`autobones.build_rig.build_rig`."""
     from .build_rig import build_rig as _build
-    from .io.landmarks import read_landmarks
+    from .io.landmarks import resolve_landmarks
     from .place import resolve_mesh
 
     V, F, _ = resolve_mesh(base)
-    lm = read_landmarks(landmarks) if not isinstance(landmarks, dict) else landmarks
+    lm, _ = resolve_landmarks(landmarks)
     return _build(V, F, lm, **kwargs)
 
 __all__ = ["AutobonesError", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "load_mesh",

@@ -212,20 +212,14 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     dict of str -> array, one row per target vertex.
     """
     from .fit import dense_correspondence
-    from .io.landmarks import read_landmarks
-    from .io.mesh import check_mesh, load_mesh
+    from .io.landmarks import resolve_landmarks
+    from .place import resolve_mesh
 
-    def mesh(m):
-        return load_mesh(m) if isinstance(m, (str, bytes)) or hasattr(m, "__fspath__") else check_mesh(*m)
-
-    def marks(lm):
-        return read_landmarks(lm) if isinstance(lm, (str, bytes)) or hasattr(lm, "__fspath__") else lm
-
-    Vs, Fs = mesh(source_mesh)
-    Vt, Ft = mesh(target_mesh)
+    Vs, Fs, _ = resolve_mesh(source_mesh)
+    Vt, Ft, _ = resolve_mesh(target_mesh)
     for name, f in fields.items():
         if len(f) != len(Vs):
             raise AutobonesError(f"field {name!r} has {len(f)} rows; the source mesh has {len(Vs)} vertices")
-    P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, marks(source_landmarks), marks(target_landmarks), **fit_options)
+    P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, resolve_landmarks(source_landmarks)[0], resolve_landmarks(target_landmarks)[0], **fit_options)
     out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok)
     return out

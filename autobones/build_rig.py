@@ -79,8 +79,6 @@ from .skeleton import Skeleton
 
 log = logging.getLogger(__name__)
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_MUSCLES = os.path.join(os.path.dirname(HERE), "generic_rig", "muscles.json")
 
 BONES = ("neck", "head", "jaw", "eye_l", "eye_r")
 REGIONS = ("scalp", "forehead", "brow", "eyelids", "nose", "cheeks", "lips", "chin", "jaw", "ears", "neck")
@@ -103,7 +101,11 @@ ADULT_EX_EX_CM = 9.3
 
 def load_muscle_definitions(path=None):
     """The muscle list of a muscles JSON file (default: ``generic_rig/muscles.json``)."""
-    path = DEFAULT_MUSCLES if path is None else os.fspath(path)
+    if path is None:
+        from generic_rig import muscles_path
+
+        path = muscles_path()
+    path = os.fspath(path)
     try:
         with open(path, encoding="utf-8") as fh:
             doc = json.load(fh)

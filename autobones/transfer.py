@@ -25,8 +25,9 @@ import numpy as np
 from .attributes import transfer_fields
 from .errors import AutobonesError
 from .fit import dense_correspondence
-from .io.landmarks import NAMES, read_landmarks, validate_landmarks
+from .io.landmarks import NAMES, resolve_landmarks, validate_landmarks
 from .orient import detect_frame, frame_from_landmarks
+from .labelled_rig import _jsonable
 from .place import resolve_mesh
 from .rig import Rig
 from .timing import Stopwatch
@@ -38,15 +39,10 @@ log = logging.getLogger("autobones")
 MIN_LANDMARKS = 10
 
 
-def default_rig_path():
-    """Folder of the built-in generic rig."""
-    from generic_rig import HERE
-
-    return os.path.join(HERE, "default")
-
-
 def load_generic(rig=None):
     """A LabelledRig from a folder (None: the built-in generic rig) or as given."""
+    from generic_rig import default_rig_path
+
     from .labelled_rig import LabelledRig
 
     if rig is None or isinstance(rig, (str, os.PathLike)):
@@ -108,12 +104,11 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
     V, F, source = resolve_mesh(head)
     generic = load_generic(rig)
     lap("load")
-    where = landmarks if isinstance(landmarks, (str, os.PathLike)) else "landmarks"
-    lm = read_landmarks(landmarks) if isinstance(landmarks, (str, os.PathLike)) else dict(landmarks)
+    lm, where = resolve_landmarks(landmarks)
     # the landmarks give the frame directly (and much faster) unless the user overrides an axis
     frame = None if up or front else frame_from_landmarks(V, F, lm)
     frame = frame or detect_frame(V, F, up=up, front=front)
-    lm = validate_landmarks(lm, V, F, frame=frame, min_count=MIN_LANDMARKS, source=str(where))
+    lm = validate_landmarks(lm, V, F, frame=frame, min_count=MIN_LANDMARKS, source=where)
     shared = [n for n in NAMES if n in lm and n in generic.landmarks]
     if len(shared) < MIN_LANDMARKS:
         raise AutobonesError(
@@ -159,7 +154,7 @@ def transfer(head, landmarks, rig=None, up=None, front=None, control_points=400,
     return Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings,
-        extra={"source": source, "muscles": [_jsonable(m) for m in muscles],
+        extra={"source": source, "muscles": _jsonable(muscles),
                "landmarks": {n: lm[n].tolist() for n in lm},
                "field_labels": {k: list(v) for k, v in generic.labels.items()},
                "reliable_fraction": float(reliable.mean())},
@@ -197,7 +192,3 @@ def bind_eyeballs(V, F, W, skeleton, generic, under):
                 W[members] = 0.0
                 W[members, names.index(eye)] = 1.0
     return W
-
-
-def _jsonable(m):
-    return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in m.items()}

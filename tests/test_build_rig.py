@@ -326,7 +326,7 @@ def test_committed_default_rig_is_up_to_date(rig):
 
 def test_default_rig_face_belongs_to_head_and_jaw_not_neck():
     from autobones.labelled_rig import LabelledRig
-    from autobones.transfer import default_rig_path
+    from generic_rig import default_rig_path
 
     rig = LabelledRig.load(default_rig_path())
     names, region = rig.labels["region"], rig.fields["region"]

@@ -438,6 +438,17 @@ def _q(value):
 # ---------------------------------------------------------------------------------------------
 # writing
 
+def resolve_landmarks(landmarks):
+    """A landmark file path or a dict -> (dict name -> (3,) float64, source for messages).
+
+    Files are read with :func:`read_landmarks`; a dict is taken as given (validate it with
+    :func:`validate_landmarks`).
+    """
+    if isinstance(landmarks, (str, bytes, os.PathLike)):
+        return read_landmarks(landmarks), os.fsdecode(landmarks)
+    return {k: np.asarray(v, dtype=np.float64) for k, v in dict(landmarks).items()}, "landmarks"
+
+
 def write_landmarks(path, landmarks, mesh_name=None):
     """Write landmarks as contract JSON, atomically (a temporary file renamed into place).
 
