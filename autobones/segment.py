@@ -107,9 +107,8 @@ def segment_head(V, F, sample_count=4000, seed=0):
     neck_root = neck_mean - (half / neck_dir[1]) * neck_dir
     # keep the bones inside the volume (horns, a long muzzle or shoulders can put the
     # geometric ends outside): pull each end toward its part's mean until it is inside
-    joint = _inside(V, F, joint, head_mean)
-    head_tail = _inside(V, F, head_tail, head_mean)
-    neck_root = _inside(V, F, neck_root, neck_mean)
+    joint, head_tail, neck_root = _inside(V, F, np.array([joint, head_tail, neck_root]),
+                                          np.array([head_mean, head_mean, neck_mean]))
     # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
     shift = _inside_shift(V, F, [(joint, head_tail), (neck_root, joint)])
     joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
@@ -129,32 +128,34 @@ def segment_head(V, F, sample_count=4000, seed=0):
         head_bone=np.array([joint, head_tail]), neck_bone=np.array([neck_root, joint]))
 
 
-def _inside(V, F, point, anchor, steps=20):
-    """``point`` moved toward ``anchor`` until its generalized winding number exceeds 1/2
-    (unchanged if already inside, or if the anchor is not inside either: open masks)."""
+def _winding(V, F, Q):
     import igl
 
+    return igl.fast_winding_number(np.ascontiguousarray(V), np.ascontiguousarray(F), np.ascontiguousarray(Q))
+
+
+def _inside(V, F, points, anchors, steps=20):
+    """Each of ``points`` (k, 3) moved toward its anchor until its generalized winding number
+    exceeds 1/2 (unchanged if already inside, or if its anchor is not inside either: open
+    masks). One winding-number evaluation for all of them."""
     t = np.linspace(1.0, 0.0, steps + 1)
-    Q = anchor + t[:, None] * (point - anchor)
-    w = igl.fast_winding_number(np.ascontiguousarray(V), np.ascontiguousarray(F), Q)
-    ok = np.flatnonzero(w > 0.5)
-    return Q[ok[0]] if len(ok) else point
+    Q = anchors[:, None, :] + t[None, :, None] * (points - anchors)[:, None, :]
+    inside = (_winding(V, F, Q.reshape(-1, 3)) > 0.5).reshape(len(points), -1)
+    out = points.copy()
+    has = inside.any(axis=1)
+    out[has] = Q[has, np.argmax(inside[has], axis=1)]
+    return out
 
 
 def _inside_shift(V, F, segments, samples=21, limit=0.1, step=0.005):
     """Smallest depth offset (0, -step, +step, -2 step, ...) that puts every sample of the
     segments inside the volume; zero if none within ``limit`` does (open masks)."""
-    import igl
-
     t = np.linspace(0.0, 1.0, samples)[:, None]
     P = np.vstack([a + t * (b - a) for a, b in segments])
-    offsets = [0.0] + [s * k * step for k in range(1, int(limit / step) + 1) for s in (-1, 1)]
-    VV, FF = np.ascontiguousarray(V), np.ascontiguousarray(F)
-    for dz in offsets:
-        shift = np.array([0.0, 0.0, dz])
-        if (igl.fast_winding_number(VV, FF, P + shift) > 0.5).all():
-            return shift
-    return np.zeros(3)
+    offsets = np.array([0.0] + [s * k * step for k in range(1, int(limit / step) + 1) for s in (-1, 1)])
+    shifted = P[None, :, :] + offsets[:, None, None] * np.array([0.0, 0.0, 1.0])
+    ok = (_winding(V, F, shifted.reshape(-1, 3)) > 0.5).reshape(len(offsets), -1).all(axis=1)
+    return np.array([0.0, 0.0, offsets[np.argmax(ok)] if ok.any() else 0.0])
 
 
 def _ordered_cut(Z, value, n_groups):
