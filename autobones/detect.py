@@ -139,11 +139,15 @@ def _quiet_stderr():
 class MediaPipeFaceMesh:
     """MediaPipe Face Mesh as a function of an image: (H, W, 3) uint8 -> (468, 2) pixels or None.
 
+    ``points`` maps the contract's names to its point indices (:data:`MEDIAPIPE_POINTS`).
+
     Parameters
     ----------
     min_confidence : float
         Face detection confidence below which no face is reported.
     """
+
+    points = MEDIAPIPE_POINTS
 
     def __init__(self, min_confidence=0.3):
         self.min_confidence = min_confidence
@@ -298,7 +302,8 @@ class LandmarkDetector:
     refine : bool
         Apply the geometric refinement (symmetry, pronasale, menton).
     detector : callable or None
-        Image -> (468, 2) pixels or None; None is :class:`MediaPipeFaceMesh`.
+        Image -> (p, 2) pixels or None, with a ``points`` attribute mapping contract names
+        to its point indices; None is :class:`MediaPipeFaceMesh`.
     """
 
     views: tuple = DEFAULT_VIEWS
@@ -356,9 +361,10 @@ class LandmarkDetector:
         if not cands:
             raise AutobonesError(NO_FACE.format(what=what))
         X, w = np.array(cands), np.array(weights)
-        names = [n for n in MEDIAPIPE_POINTS]
-        Xn = np.stack([X[:, list(MEDIAPIPE_POINTS[n])].mean(axis=1) for n in names], axis=1)
-        wn = np.stack([w[:, list(MEDIAPIPE_POINTS[n])].min(axis=1) for n in names], axis=1)
+        table = getattr(detector, "points", MEDIAPIPE_POINTS)
+        names = [n for n in table]
+        Xn = np.stack([X[:, list(table[n])].mean(axis=1) for n in names], axis=1)
+        wn = np.stack([w[:, list(table[n])].min(axis=1) for n in names], axis=1)
         comb = weighted_median(Xn, wn)
         # the unit: ex-ex of the combined points
         iex = names.index("exocanthion_l"), names.index("exocanthion_r")
