@@ -160,12 +160,9 @@ def _make_rig(input_path, options, record):
     if mode == "place":
         return autobones.place(input_path, density=options["density"], random_state=options["random_state"])
     if mode == "transfer":
+        # a mesh without a landmark file beside it gets automatic landmarks (human faces)
         lm = landmarks_for(input_path)
-        if lm is None:
-            stem = os.path.splitext(os.path.basename(input_path))[0]
-            raise AutobonesError(f"{input_path}: no landmark file beside it (looked for "
-                                 + ", ".join(stem + s for s in LANDMARK_SUFFIXES) + ")")
-        record["landmarks"] = lm
+        record["landmarks"] = lm if lm is not None else "detected"
         return autobones.transfer(input_path, lm, rig=options.get("rig"))
     raise AutobonesError(f"unknown batch mode {mode!r}; use 'place' or 'transfer'")
 
@@ -549,7 +546,7 @@ def _public(record, inp, out, options):
     rel_in = os.path.relpath(record["input"], inp).replace(os.sep, "/")
     rec["input"] = rel_in
     rec["output"] = os.path.relpath(record["output"], out).replace(os.sep, "/")
-    if rec.get("landmarks"):
+    if rec.get("landmarks") and rec["landmarks"] != "detected":
         rec["landmarks"] = os.path.relpath(rec["landmarks"], inp).replace(os.sep, "/")
     rec.pop("pid", None)
     err = rec.get("error")

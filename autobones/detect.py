@@ -20,7 +20,8 @@ commercial scan tools use:
 5. Geometric refinement, where geometry is more precise than a picture: midline
    names are moved onto the symmetry plane, bilateral pairs are made mirror images
    of each other (a pair whose sides disagree by more than ``max_mirror_error`` is
-   flagged), pronasale becomes the most anterior point of the nose tip region and
+   flagged; a side whose views disagreed is replaced by the mirror image of the other,
+   flagged, at half its confidence), pronasale becomes the most anterior point of the nose tip region and
    menton the lowest point of the chin on the symmetry plane; everything is
    snapped to the surface.
 
@@ -79,8 +80,8 @@ PROFILE_TILT = 15.0
 KEY_LIGHT = (0.0, 0.6, 1.0)
 
 NO_FACE = ("no face found in the renders of {what}: automatic landmarks work on human and "
-           "human-like faces; give the landmarks with --landmarks FILE (the contract's JSON, a "
-           "MeshLab .pp or an iBUG-68 list)")
+           "human-like faces; give its landmarks in a file instead (the contract's JSON, a MeshLab "
+           ".pp or an iBUG-68 list: transfer --landmarks FILE, landmarks --from FILE)")
 
 
 class DetectedLandmarks(dict):
@@ -164,7 +165,7 @@ class MediaPipeFaceMesh:
             raise AutobonesError(
                 "automatic landmarks need the optional face detector: pip install 'autobones[landmarks]' "
                 f"(MediaPipe; import failed: {exc})") from None
-        with _quiet_stderr():
+        with _quiet_stderr():  # also when used on its own
             self._model = face_mesh.FaceMesh(static_image_mode=True, max_num_faces=1,
                                              refine_landmarks=False,
                                              min_detection_confidence=self.min_confidence)
@@ -321,6 +322,12 @@ class LandmarkDetector:
         F = np.asarray(F, dtype=np.int64)
         frame = detect_frame(V, F) if frame is None else frame
         detector = self.detector if self.detector is not None else MediaPipeFaceMesh()
+        # MediaPipe's graph threads log to file descriptor 2 while they work
+        quiet = _quiet_stderr() if isinstance(detector, MediaPipeFaceMesh) else contextlib.nullcontext()
+        with quiet:
+            return self._detect(V, F, frame, detector, what)
+
+    def _detect(self, V, F, frame, detector, what):
         Vc = frame.to_canonical(V)
 
         # 1. find the face on a whole-head front picture
@@ -355,7 +362,7 @@ class LandmarkDetector:
                 N = vertex_normals(Vc, F)
             # how squarely the view sees each point: grazing views lift badly
             _, near = cKDTree(Vc).query(np.nan_to_num(P))
-            facing = np.clip(N[near] @ d, 0.0, 1.0)
+            facing = np.abs(N[near] @ d)            # two-sided: scans come with either winding
             cands.append(P)
             weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** 2, 0.0))
         if not cands:
@@ -391,6 +398,10 @@ class LandmarkDetector:
                 confidence[n] = float(np.clip(1.0 - spread[i] / self.max_disagreement, 0.0, 1.0))
         if self.refine:
             points, flagged = refine(Vc, F, points, unit_c, self.max_mirror_error)
+            for n in points:
+                if n in dropped:            # stood in for by its mirrored partner
+                    del dropped[n]
+                    confidence[n] = 0.5 * confidence[mirror_name(n)]
         P = np.array([points[n] for n in points])
         P = closest_points(P, Vc, F)[0]
         Pin = frame.from_canonical(P)
@@ -473,6 +484,11 @@ def refine(Vc, F, points, unit, max_mirror_error):
             out[n], out[m] = mid, reflect(mid)
         elif not n.endswith(("_l", "_r")):
             out[n] = out[n] - (out[n] @ n_ - c) * n_
+    for n in list(out):
+        if n.endswith(("_l", "_r")) and mirror_name(n) not in out:
+            # its own views disagreed: the mirror image of the other side stands in
+            out[mirror_name(n)] = reflect(out[n])
+            flagged[mirror_name(n)] = f"mirrored from {n}"
     # the face's own vertical: eye corners over the mouth, in the mirror plane
     eyes = [out[k] for k in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r") if k in out]
     mouth = [out[k] for k in ("stomion", "labiale_superius", "labiale_inferius") if k in out]
@@ -496,7 +512,7 @@ def refine(Vc, F, points, unit, max_mirror_error):
     return out, flagged
 
 
-def detect_landmarks(mesh, up=None, front=None, **options):
+def detect_landmarks(mesh, up=None, front=None, name=None, **options):
     """The contract's landmarks on a human head, found automatically.
 
     Parameters
@@ -505,6 +521,8 @@ def detect_landmarks(mesh, up=None, front=None, **options):
         The head (None: the built-in default head); any frame and unit.
     up, front : str or None
         Input axes (``'+z'``, ``'-x'``...) when the orientation finder should not guess.
+    name : str or None
+        What to call the head in messages (default: its file name).
     **options
         :class:`LandmarkDetector` parameters (``views``, ``size``, ``max_disagreement``...).
 
@@ -524,4 +542,4 @@ def detect_landmarks(mesh, up=None, front=None, **options):
 
     V, F, source = resolve_mesh(mesh)
     frame = detect_frame(V, F, up=up, front=front)
-    return LandmarkDetector(**options).detect(V, F, frame=frame, what=source or "the head")
+    return LandmarkDetector(**options).detect(V, F, frame=frame, what=name or source or "the head")

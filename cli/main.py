@@ -37,6 +37,7 @@ Inputs: OBJ, PLY, OFF, STL, glTF/GLB, in any frame and unit; +Y-up/+Z-front is n
 TRANSFER_EPILOG = """\
 examples:
   autobones transfer head.obj --landmarks head.landmarks.json -o head.glb
+  autobones transfer scan.obj -o scan.glb                   human face: landmarks found automatically
   autobones transfer goat.obj --landmarks goat.pp -o goat.glb            MeshLab picked points
   autobones transfer scan.ply --landmarks scan.ibug68.json --rig my_rig/ -o scan.glb
 
@@ -49,6 +50,28 @@ Landmark names, frame and file formats: the landmark contract (README). Bad land
 with one line naming the problem.
 """
 
+LANDMARKS_EPILOG = """\
+examples:
+  autobones landmarks scan.obj -o scan.landmarks.json                   found automatically (human faces)
+  autobones landmarks scan.obj -o scan.landmarks.json --preview scan.png
+  autobones landmarks goat.obj --from goat.pp --preview goat.png        convert a file and draw it
+  autobones landmarks bust.stl --up +z --front -y -o bust.landmarks.json
+
+How: the head is turned upright, rendered on the CPU from the front and four views around it
+(+-30 deg yaw, +-15 deg pitch), MediaPipe Face Mesh finds 468 points in each picture, they are
+lifted onto the surface and combined across views; then midline names go onto the face's
+symmetry plane, left/right pairs become mirror images, the nose tip and menton are taken from
+the midline profile. A name whose views disagree is dropped, not guessed; a pair whose sides
+disagree is flagged. 27 of the contract's names are found (the ones a face picture shows).
+
+Animals, most cartoons and back-of-head scans have no face the detector knows: the command
+says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp).
+Needs the optional detector: pip install 'autobones[landmarks]'.
+
+output: the contract's JSON ({"format": "autobones-landmarks/1", "landmarks": {name: [x, y, z]}}),
+in the mesh's own frame and units, plus "confidence" per name (1 = every view agrees).
+"""
+
 BUILD_EPILOG = """\
 examples:
   autobones build-rig base.obj --landmarks base.landmarks.json -o my_rig/
@@ -59,7 +82,8 @@ examples:
 BATCH_EPILOG = """\
 examples:
   autobones batch heads/ -o rigs/ --density dense --jobs 2      place on every mesh, recursively
-  autobones batch heads/ -o rigs/ --transfer                    landmarks NAME.landmarks.json / NAME.pp beside each mesh
+  autobones batch heads/ -o rigs/ --transfer                    landmarks NAME.landmarks.json / NAME.pp beside each
+                                                                mesh; found automatically where there is none
   autobones batch heads/ -o rigs/ --scheduler tcp://scheduler.example:8786    the same, on a Dask cluster
 
 output: OUT/<path relative to INPUT_DIR without extension>.glb, .rig.json, .weights.npz per
@@ -105,14 +129,31 @@ def build_parser():
                     "(seed 004). Writes the same skinned glTF as `place`.",
         epilog=TRANSFER_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     t.add_argument("head", help="head mesh file (OBJ, PLY, OFF, STL, glTF/GLB; any frame and unit)")
-    t.add_argument("--landmarks", required=True,
+    t.add_argument("--landmarks",
                    help="landmark file in the head's frame: contract .json, MeshLab .pp, or an iBUG-68 "
-                        ".json/.pts/.ljson; at least 10 names shared with the rig")
+                        ".json/.pts/.ljson; at least 10 names shared with the rig (default: found "
+                        "automatically on a human face, see `autobones landmarks`)")
     t.add_argument("--rig", help="generic rig folder made by `autobones build-rig` (default: the built-in one)")
     t.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
     t.add_argument("--up", help="input axis that points up (default: detected; used to check left/right)")
     t.add_argument("--front", help="input axis the face looks along (default: detected)")
     _common(t)
+
+    m = sub.add_parser(
+        "landmarks", help="find the contract's landmarks on a human head automatically, or draw given ones",
+        description="Find the landmark contract's names on a human or human-like head automatically "
+                    "(render, detect in 2-D, lift to the surface), write them as the contract's JSON in "
+                    "the mesh's own frame, and optionally draw a picture to check them by eye.",
+        epilog=LANDMARKS_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    m.add_argument("head", help="head mesh file (OBJ, PLY, OFF, STL, glTF/GLB; any frame and unit)")
+    m.add_argument("-o", "--output", help="landmark file to write (.json); default: HEAD_NAME.landmarks.json "
+                                          "in the current folder (none with --from and only --preview)")
+    m.add_argument("--from", dest="source", metavar="FILE",
+                   help="read the landmarks from FILE (contract .json, MeshLab .pp, iBUG-68) instead of detecting")
+    m.add_argument("--preview", metavar="PNG", help="also draw a front and a side picture with every landmark named")
+    m.add_argument("--up", help="input axis that points up: +x -x +y -y +z -z (default: detected)")
+    m.add_argument("--front", help="input axis the face looks along (default: detected)")
+    _common(m)
 
     b = sub.add_parser(
         "build-rig", help="build a labelled generic rig from a base head and its landmarks",
@@ -137,8 +178,9 @@ def build_parser():
     a.add_argument("--density", default="medium",
                    help="facial bones for place: sparse (8), medium (16, default), dense (32) or a number")
     a.add_argument("--transfer", action="store_true",
-                   help="transfer the labelled rig instead of placing bones; needs NAME.landmarks.json "
-                        "(or NAME.pp, .pts, .ljson) beside each NAME.obj")
+                   help="transfer the labelled rig instead of placing bones; uses NAME.landmarks.json "
+                        "(or NAME.pp, .pts, .ljson) beside each NAME.obj, else finds them automatically "
+                        "(human faces; needs autobones[landmarks])")
     a.add_argument("--rig", metavar="DIR", help="generic rig folder for --transfer (default: the built-in one)")
     a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
     a.add_argument("--scheduler", metavar="ADDRESS",
@@ -183,10 +225,47 @@ def cmd_transfer(args):
     t = time.perf_counter()
     rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
     written = rig.save(out)
+    if rig.options.get("landmarks_source") == "detected":
+        conf = rig.extra.get("landmark_confidence", {})
+        dropped = rig.extra.get("landmarks_dropped", {})
+        print(f"landmarks: {len(conf)} found automatically, mean confidence {sum(conf.values()) / max(len(conf), 1):.2f}"
+              + (f"; dropped {', '.join(dropped)}" if dropped else "")
+              + f" (check them: autobones landmarks {args.head} --preview PNG)")
     print(f"{written[0]}: {len(rig.skeleton)} bones, {len(rig.extra['muscles'])} muscles, "
           f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
           f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
           f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
+    return 0
+
+
+def cmd_landmarks(args):
+    import autobones
+    from autobones.io.landmarks import read_landmarks, validate_landmarks, write_landmarks
+    from autobones.preview import save_preview
+
+    t = time.perf_counter()
+    V, F = autobones.load_mesh(args.head)
+    if args.source:
+        frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
+        lm = validate_landmarks(read_landmarks(args.source), V, F, frame=frame, min_count=1, source=args.source)
+        confidence, how = None, f"read from {args.source}"
+    else:
+        lm = autobones.detect_landmarks((V, F), up=args.up, front=args.front, name=args.head)
+        frame, confidence = lm.frame, lm.confidence
+        how = f"found automatically, mean confidence {sum(confidence.values()) / max(len(confidence), 1):.2f}"
+        if lm.dropped:
+            how += "; dropped " + ", ".join(f"{n} ({why})" for n, why in lm.dropped.items())
+        if lm.flagged:
+            how += "; check " + ", ".join(sorted(lm.flagged))
+    out = args.output or (None if args.source and args.preview else
+                          os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
+    if args.preview:
+        save_preview(args.preview, V, F, lm, frame=frame, confidence=confidence)
+    if out:
+        write_landmarks(out, lm, mesh_name=os.path.basename(args.head),
+                        **({"confidence": confidence} if confidence is not None else {}))
+    print(f"{out or args.preview}: {len(lm)} landmarks {how}, {time.perf_counter() - t:.1f} s"
+          + (f"; preview {args.preview}" if args.preview and out else ""))
     return 0
 
 
@@ -244,7 +323,8 @@ def cmd_batch(args):
     return 0 if report["counts"]["failed"] == 0 else 1
 
 
-COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "build-rig": cmd_build_rig, "batch": cmd_batch}
+COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "landmarks": cmd_landmarks, "build-rig": cmd_build_rig,
+            "batch": cmd_batch}
 
 
 def _axis_values(argv):

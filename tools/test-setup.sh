@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Everything the tests need beyond `pip install .`: Python test packages, Blender 3.4
+# Everything the tests need beyond `pip install .`: Python test packages and the optional
+# face detector (MediaPipe, for `autobones landmarks`), Blender 3.4
 # (a real glTF client, headless) with the numpy its glTF importer needs, and the Khronos
 # glTF validator (npm). Idempotent; run as root (or with sudo) on Debian/Ubuntu.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python -m pip install -q -e '.[test]'
+python -m pip install -q -e '.[test,landmarks]'
 need=()
 command -v blender >/dev/null || need+=(blender)
 dpkg -s python3-numpy >/dev/null 2>&1 || need+=(python3-numpy)

@@ -449,7 +449,7 @@ def resolve_landmarks(landmarks):
     return {k: np.asarray(v, dtype=np.float64) for k, v in dict(landmarks).items()}, "landmarks"
 
 
-def write_landmarks(path, landmarks, mesh_name=None):
+def write_landmarks(path, landmarks, mesh_name=None, confidence=None):
     """Write landmarks as contract JSON, atomically (a temporary file renamed into place).
 
     Parameters
@@ -461,6 +461,9 @@ def write_landmarks(path, landmarks, mesh_name=None):
         Checked with :func:`validate_landmarks` (``min_count=1``).
     mesh_name : str or None
         Written as the informative ``"mesh"`` field when given.
+    confidence : mapping str -> float or None
+        Written as an informative ``"confidence"`` object (automatic landmarks); readers
+        of the contract ignore it.
 
     Names are written in :data:`NAMES` order, one per line; floats are written
     with Python's shortest round-trip repr, so reading gives back the same bits.
@@ -474,6 +477,11 @@ def write_landmarks(path, landmarks, mesh_name=None):
     lines.append('  "landmarks": {')
     items = [f'    {json.dumps(name)}: [{", ".join(repr(float(c)) for c in p)}]' for name, p in clean.items()]
     lines.append(",\n".join(items))
+    if confidence:
+        lines.append("  },")
+        lines.append('  "confidence": {')
+        lines.append(",\n".join(f"    {json.dumps(n)}: {round(float(confidence[n]), 3)!r}"
+                                for n in clean if n in confidence))
     lines.append("  }")
     lines.append("}")
     text = "\n".join(lines) + "\n"

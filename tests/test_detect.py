@@ -1,0 +1,278 @@
+"""Automatic landmarks (autobones.detect) and landmark previews (autobones.preview).
+
+The detector is MediaPipe, installed by the ``landmarks`` extra (tools/test-setup.sh);
+these tests fail, never skip, without it.
+"""
+import itertools
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import autobones
+from autobones.detect import (DetectedLandmarks, LandmarkDetector, MEDIAPIPE_POINTS, lift, refine,
+                              symmetry_plane, weighted_median)
+from autobones.errors import AutobonesError
+from autobones.io.landmarks import NAMES, mirror_name, read_landmarks
+from autobones.io.mesh import load_mesh
+from autobones.place import default_head
+from shared_data import ROOT, data
+
+CLI = [sys.executable, "-m", "cli.main"]
+
+
+def run(args, cwd):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run(CLI + args, cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+
+
+def errors(found, truth):
+    """Per-name distance in % of the true outer-eye-corner distance."""
+    unit = np.linalg.norm(np.subtract(truth["exocanthion_l"], truth["exocanthion_r"]))
+    return {n: 100 * np.linalg.norm(np.subtract(found[n], truth[n])) / unit for n in truth if n in found}
+
+
+@pytest.fixture(scope="module")
+def ict():
+    path = data("ict/identity000.obj")
+    V, F = load_mesh(path)
+    return V, F, read_landmarks(data("ict/identity000.landmarks.json")), LandmarkDetector().detect(V, F)
+
+
+# --- the pieces -------------------------------------------------------------------------------
+
+def test_lift_interpolates_inside_and_reaches_the_nearest_covered_pixel():
+    H, W = 6, 8
+    rows, cols = np.mgrid[0:H, 0:W].astype(float)
+    S = np.stack([cols, rows, cols + rows], axis=2)          # a plane: point = (x, y, x + y)
+    S[:, 6:] = np.nan                                        # empty on the right
+    P = lift(S, np.array([[2.25, 3.5], [6.5, 1.0], [7.0 + 3.5, 1.0]]), reach=2)
+    np.testing.assert_allclose(P[0], [2.25, 3.5, 5.75])      # bilinear, exact on a plane
+    np.testing.assert_allclose(P[1], [5.0, 1.0, 6.0])        # nearest covered pixel, 1.5 px away
+    assert np.all(np.isnan(P[2]))                            # 5.5 px from cover: beyond reach
+
+
+def test_weighted_median_ignores_missing_and_unweighted_candidates():
+    X = np.array([[[0.0, 0, 0]], [[1.0, 1, 1]], [[2.0, 2, 2]], [[np.nan, 0, 0]], [[100.0, 100, 100]]])
+    w = np.array([[1.0], [1.0], [1.0], [5.0], [0.0]])
+    np.testing.assert_allclose(weighted_median(X, w)[0], [1.0, 1.0, 1.0])
+    w2 = np.array([[1.0], [1.0], [3.0], [0.0], [0.0]])
+    np.testing.assert_allclose(weighted_median(X, w2)[0], [2.0, 2.0, 2.0])
+    assert np.all(np.isnan(weighted_median(X[:1], np.zeros((1, 1)))))
+
+
+def _mirrored_set(normal, offset, rng):
+    normal = normal / np.linalg.norm(normal)
+    reflect = lambda p: p - 2 * (p @ normal - offset) * normal
+    pts = {}
+    for n in NAMES:
+        if n.endswith("_l"):
+            p = rng.normal(size=3)
+            p += (offset + 0.5 + abs(rng.normal()) - p @ normal) * normal   # on the left side
+            pts[n], pts[mirror_name(n)] = p, reflect(p)
+        elif not n.endswith("_r"):
+            p = rng.normal(size=3)
+            pts[n] = p - (p @ normal - offset) * normal
+    return pts, reflect
+
+
+def test_symmetry_plane_is_recovered_from_mirrored_landmarks():
+    rng = np.random.default_rng(0)
+    normal = np.array([0.9, 0.3, -0.2])
+    pts, _ = _mirrored_set(normal, 0.7, rng)
+    n, c = symmetry_plane(pts)
+    np.testing.assert_allclose(n, normal / np.linalg.norm(normal), atol=1e-12)
+    assert c == pytest.approx(0.7)
+
+
+def test_refine_makes_pairs_mirror_images_and_flags_a_lopsided_pair():
+    rng = np.random.default_rng(1)
+    pts, _ = _mirrored_set(np.array([1.0, 0.05, 0.0]), 0.0, rng)
+    noisy = {k: v + rng.normal(scale=0.01, size=3) for k, v in pts.items()}
+    noisy["cheilion_l"] = noisy["cheilion_l"] + [0.0, 0.3, 0.0]            # one side far off
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    out, flagged = refine(V, np.array([[0, 1, 2]]), noisy, unit=1.0, max_mirror_error=0.1)
+    n, c = symmetry_plane(out)
+    reflect = lambda p: p - 2 * (p @ n - c) * n
+    for name in out:
+        if name.endswith("_l"):
+            np.testing.assert_allclose(out[mirror_name(name)], reflect(out[name]), atol=1e-9)
+        elif not name.endswith("_r"):
+            assert abs(out[name] @ n - c) < 1e-9
+    assert set(flagged) == {"cheilion_l", "cheilion_r"}
+
+
+def test_point_table_names_are_contract_names():
+    assert set(MEDIAPIPE_POINTS) <= set(NAMES)
+    assert all(all(0 <= i < 468 for i in idx) for idx in MEDIAPIPE_POINTS.values())
+    # the table is left/right consistent: every bilateral name has its mirror
+    assert all(mirror_name(n) in MEDIAPIPE_POINTS for n in MEDIAPIPE_POINTS if n.endswith(("_l", "_r")))
+
+
+# --- on real heads ----------------------------------------------------------------------------
+
+def test_ict_identity_landmarks_match_the_published_ones(ict):
+    V, F, truth, found = ict
+    assert isinstance(found, DetectedLandmarks)
+    err = errors(found, truth)
+    assert len(err) >= 25, f"only {sorted(err)} found; dropped {found.dropped}"
+    assert np.mean(list(err.values())) < 4.0, err            # issue target 3%: see benchmarks/landmarks.py
+    assert max(err.values()) < 10.0, err
+    assert set(found.confidence) == set(found) and all(0 <= c <= 1 for c in found.confidence.values())
+    assert found.unit == pytest.approx(np.linalg.norm(np.subtract(truth["exocanthion_l"], truth["exocanthion_r"])),
+                                       rel=0.1)
+
+
+def test_scan_landmarks_match_the_published_ones():
+    path = data("menpo3d/james.obj")
+    found = autobones.detect_landmarks(str(path))
+    err = errors(found, read_landmarks(data("menpo3d/james.landmarks.json")))
+    assert len(err) >= 25 and np.mean(list(err.values())) < 4.0 and max(err.values()) < 10.0, err
+
+
+def test_detected_landmarks_are_on_the_surface_and_left_is_left(ict):
+    from autobones.stick import closest_points
+
+    V, F, _, found = ict
+    P = np.array(list(found.values()))
+    d = np.linalg.norm(closest_points(P, V, F)[0] - P, axis=1)
+    assert d.max() < 1e-9 * np.ptp(V, axis=0).max() + 1e-12
+    frame = found.frame
+    for n in found:
+        if n.endswith("_l"):
+            assert frame.to_canonical(found[n][None])[0, 0] > frame.to_canonical(found[mirror_name(n)][None])[0, 0]
+
+
+def test_same_landmarks_when_the_head_is_turned_and_in_millimetres(ict):
+    V, F, _, found = ict
+    # facing -X, Z up, millimetres (the ICT head is in centimetres): rotation + scale x10
+    R = np.array([[0.0, 0, -1], [-1, 0, 0], [0, 1, 0]])      # +Z front -> -X, +Y up -> +Z
+    assert np.allclose(R @ [0, 0, 1], [-1, 0, 0]) and np.allclose(R @ [0, 1, 0], [0, 0, 1])
+    assert np.linalg.det(R) == pytest.approx(1.0)
+    again = LandmarkDetector().detect(10.0 * V @ R.T, F)
+    assert again.frame.up == "+z" and again.frame.front == "-x"
+    back = {n: (again[n] / 10.0) @ R for n in again}
+    assert set(back) == set(found)
+    diff = max(np.linalg.norm(back[n] - found[n]) for n in found) / found.unit
+    assert diff < 1e-3, diff
+
+
+@pytest.mark.parametrize("mesh", ["misc/goathead.obj", "misc/robot_head_neutral.obj"])
+def test_no_face_on_animals_and_cartoons(mesh):
+    with pytest.raises(AutobonesError, match="no face found"):
+        autobones.detect_landmarks(str(data(mesh)))
+
+
+def test_back_of_the_head_has_no_face():
+    V, F = default_head()
+    with pytest.raises(AutobonesError, match="no face found"):
+        autobones.detect_landmarks((V, F), front="-z")       # told the back is the front
+
+
+def test_missing_detector_names_the_extra(monkeypatch):
+    from autobones import detect
+
+    monkeypatch.setitem(sys.modules, "mediapipe", None)
+    monkeypatch.setitem(sys.modules, "mediapipe.python", None)
+    monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)
+    with pytest.raises(AutobonesError, match=r"autobones\[landmarks\]"):
+        detect.MediaPipeFaceMesh()(np.zeros((8, 8, 3), np.uint8))
+
+
+def test_views_that_disagree_drop_the_name():
+    """A detector that puts one point in a different place in every view: that name is dropped."""
+    from autobones.detect import MediaPipeFaceMesh
+
+    real = MediaPipeFaceMesh()
+    calls = itertools.count()
+
+    class Jittery:
+        points = MEDIAPIPE_POINTS
+
+        def __call__(self, image):
+            px = real(image)
+            if px is not None:
+                k = next(calls)
+                px[list(MEDIAPIPE_POINTS["pronasale"])] += [(-1) ** k * 40.0 * k, 0.0]
+            return px
+
+    found = LandmarkDetector(detector=Jittery()).detect(*default_head())
+    assert "pronasale" not in found and "pronasale" in found.dropped
+    assert "nasion" in found
+
+
+# --- transfer, batch and the command line ------------------------------------------------------
+
+def test_transfer_finds_landmarks_itself(tmp_path):
+    path = data("ict/identity002.obj")
+    details = {}
+    rig = autobones.transfer(str(path), details=details)
+    assert rig.options["landmarks_source"] == "detected"
+    assert len(rig.options["landmarks_used"]) >= 25
+    assert set(rig.extra["landmark_confidence"]) == set(rig.extra["landmarks"])
+    np.testing.assert_allclose(rig.weights.sum(axis=1), 1.0, atol=1e-6)
+    # the jaw lands on the chin: the transferred jaw weight is high at the published menton
+    truth = read_landmarks(data("ict/identity002.landmarks.json"))
+    near = np.argmin(np.linalg.norm(rig.vertices - truth["menton"], axis=1))
+    assert rig.fields["jaw_weight"][near] > 0.8
+
+
+def test_cli_landmarks_writes_the_contract_json_and_a_preview(tmp_path):
+    r = run(["landmarks", str(ROOT / "generic_rig" / "default_head.obj"), "-o", "head.landmarks.json",
+             "--preview", "head.png"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == "", r.stderr                           # MediaPipe's own logging stays quiet
+    doc = json.loads((tmp_path / "head.landmarks.json").read_text())
+    assert doc["format"] == "autobones-landmarks/1" and doc["mesh"] == "default_head.obj"
+    lm = read_landmarks(tmp_path / "head.landmarks.json")
+    assert len(lm) >= 25 and set(doc["confidence"]) == set(lm)
+    from PIL import Image
+
+    with Image.open(tmp_path / "head.png") as im:
+        assert im.size[1] == 640 and im.size[0] >= 2 * 640
+        pixels = np.asarray(im.convert("RGB"))
+    assert (np.abs(pixels.astype(int) - [220, 30, 30]).sum(axis=2) < 30).sum() > 50   # red midline markers drawn
+
+
+def test_cli_no_face_is_one_line_exit_2_and_nothing_written(tmp_path):
+    r = run(["landmarks", str(data("misc/goathead.obj")), "-o", "goat.json", "--preview", "goat.png"], tmp_path)
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and "no face found" in r.stderr and "--landmarks" in r.stderr, r.stderr
+    assert os.listdir(tmp_path) == []
+    r = run(["transfer", str(data("misc/goathead.obj")), "-o", "goat.glb"], tmp_path)
+    assert r.returncode == 2 and "no face found" in r.stderr and os.listdir(tmp_path) == []
+
+
+def test_cli_preview_from_a_given_file_on_an_animal(tmp_path):
+    r = run(["landmarks", str(data("misc/goathead.obj")), "--from", str(ROOT / "tests" / "landmarks" /
+                                                                        "goathead.landmarks.json"),
+             "--preview", "goat.png"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert os.listdir(tmp_path) == ["goat.png"]
+
+
+def test_cli_from_a_pp_file_converts_it(tmp_path):
+    src = read_landmarks(ROOT / "tests" / "landmarks" / "goathead.landmarks.json")
+    pp = tmp_path / "goat.pp"
+    pp.write_text("<!DOCTYPE PickedPoints>\n<PickedPoints>\n" + "".join(
+        f'<point name="{n}" x="{float(p[0])!r}" y="{float(p[1])!r}" z="{float(p[2])!r}" active="1"/>\n' for n, p in src.items())
+        + "</PickedPoints>\n")
+    r = run(["landmarks", str(data("misc/goathead.obj")), "--from", str(pp), "-o", "goat.landmarks.json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    back = read_landmarks(tmp_path / "goat.landmarks.json")
+    assert set(back) == set(src) and all(np.array_equal(back[n], src[n]) for n in src)
+
+
+def test_batch_transfer_detects_where_no_landmark_file_is(tmp_path):
+    from autobones.batch import run_batch, make_options
+
+    (tmp_path / "in").mkdir()
+    os.symlink(data("menpo3d/james.obj"), tmp_path / "in" / "james.obj")
+    report = run_batch(str(tmp_path / "in"), str(tmp_path / "out"), make_options(transfer=True))
+    assert report["counts"]["ok"] == 1, report
+    assert report["files"][0]["landmarks"] == "detected"
+    side = json.loads((tmp_path / "out" / "james.rig.json").read_text())
+    assert side["options"]["landmarks_source"] == "detected"
