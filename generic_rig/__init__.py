@@ -17,3 +17,8 @@ def default_rig_path():
 def muscles_path():
     """The muscle definitions (generic_rig/muscles.json) that build_rig reads by default."""
     return os.path.join(HERE, "muscles.json")
+
+
+def expressions_path():
+    """Action units, emotion prototypes and skin/muscle model parameters (generic_rig/expressions.json)."""
+    return os.path.join(HERE, "expressions.json")

@@ -1,0 +1,614 @@
+"""Facial expressions on a transferred rig: seed 000 §4.2's skin/muscle model, FACS action units.
+
+The deformation chain of seed 000 (Figure 4.21), rebuilt procedurally on any head
+from what ``autobones.transfer`` carries onto it (muscle joints, the muscle
+influence fields, regions, skeleton and skin weights, landmarks):
+
+1. muscles (``muscles.py``, ``wire.py``): every muscle joint pulls one wire that
+   runs along the skin over the muscle (from part way up the muscle to just past
+   its insertion). Each wire control vertex is point-constrained to a weighted
+   average of locators: its muscle's locator (weight 001's force profile along the
+   muscle), the locators of the neighbouring muscles whose influence fields cover
+   it (weight: that field times ``cross_talk``) and one unparented rest locator.
+   The point-constraint weights do not depend on the contractions, so the skin
+   displacement is a fixed linear map of the contraction vector: one (n, 3) basis
+   field per muscle. Where wires overlap, their dropoffs are normalised to sum to
+   at most 1, so contractions on one skin patch blend and damp instead of adding.
+   The mouth line (cheilion_r - stomion - cheilion_l) cuts the influence of a
+   wire on the upper lip off the lower lip and vice versa.
+2. skull non-penetration: a skin point may sink along its rest normal by at most
+   the soft-tissue thickness of its region (the offset skull surface, taken
+   locally parallel to the skin).
+3. creases: frontalis contractions press horizontal furrows into the forehead,
+   corrugator ones vertical furrows between the brows.
+4. eyelids (four lid joints rotating about the eye pivots) and bone movements:
+   jaw, head and neck rotations blended by the rig's skin weights (linear blend
+   skinning), with the jaw weight sharpened across the mouth line so the jaw
+   opens the lower lip only; eyeballs gaze through their eye bones.
+
+Everything is computed in the head's canonical frame (+Y up, +Z front, +X the
+subject's left, head sizes) and returned in the input frame and units. Lengths in
+``generic_rig/expressions.json`` are in face units (fu = the exocanthion
+distance of that head), so the same numbers give each head its own expression.
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import AutobonesError
+from .muscles import muscles_from_rig
+from .wire import wire_weights
+
+REGIONS_DEFAULT = ("scalp", "forehead", "brow", "eyelids", "nose", "cheeks", "lips", "chin", "jaw", "ears", "neck")
+LIDS = ("upper_l", "upper_r", "lower_l", "lower_r")
+
+
+def load_expressions(path=None):
+    """The expression definitions (default ``generic_rig/expressions.json``) as a dict."""
+    if path is None:
+        from generic_rig import expressions_path
+
+        path = expressions_path()
+    if isinstance(path, dict):
+        return path
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+        for key in ("model", "muscle_types", "action_units", "expressions"):
+            doc[key]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise AutobonesError(f"{path}: cannot read the expression definitions ({exc})") from None
+    return doc
+
+
+def _ramp(v, a, b):
+    """Smooth step: 0 at ``a``, 1 at ``b`` (either order), C1 in between."""
+    t = np.clip((np.asarray(v, dtype=np.float64) - a) / (b - a), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _rot(axis, deg):
+    """(3, 3) right-handed rotation about canonical axis 0/1/2 by ``deg`` degrees."""
+    a = np.radians(float(deg))
+    c, s = np.cos(a), np.sin(a)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R = np.eye(3)
+    R[i, i], R[i, j], R[j, i], R[j, j] = c, -s, s, c
+    return R
+
+
+def _euler(deg):
+    """(pitch, yaw, roll) degrees about canonical +X, +Y, +Z -> R = Rz Ry Rx."""
+    p, y, r = (list(np.ravel(deg).astype(float)) + [0.0, 0.0, 0.0])[:3]
+    return _rot(2, r) @ _rot(1, y) @ _rot(0, p)
+
+
+def _align(a, b):
+    """Smallest rotation taking unit vector ``a`` to unit vector ``b``."""
+    v, c = np.cross(a, b), float(a @ b)
+    if c < -0.999999:
+        return _rot(1, 180.0)
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def vertex_normals(V, F):
+    """(n, 3) area-weighted unit vertex normals (zero for vertices in no face)."""
+    FN = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    N = np.zeros_like(V)
+    for k in range(3):
+        N += np.stack([np.bincount(F[:, k], weights=FN[:, j], minlength=len(V)) for j in range(3)], axis=1)
+    return N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+
+
+class ExpressionModel:
+    """Seed 000's skin/muscle model with FACS action units, built on one transferred rig.
+
+    Parameters
+    ----------
+    definitions : str, dict or None
+        Expression definitions (``generic_rig/expressions.json`` when None).
+
+    Attributes (after :meth:`fit`)
+    ----------
+    muscle_names_ : list of str
+        Order of the contraction vector.
+    muscle_basis_ : (k, n, 3) float
+        Canonical-frame skin displacement of each muscle at contraction 1 (before
+        skull non-penetration); the muscle stage is ``tensordot(c, muscle_basis_, 1)``.
+    crease_basis_ : dict int -> (n, 3) float
+        Canonical crease displacement per unit contraction of the muscles that crease.
+    jaw_weights_ : (n, b) float
+        The rig's skin weights with the jaw column sharpened across the mouth line.
+    skin_ : (n,) bool
+        Vertices the muscles and eyelids move (the largest part, not eyeballs).
+    lid_weights_ : (4, n) float
+        Upper/lower lid joint weights, order :data:`LIDS`.
+    lid_close_deg_ : (2,) float
+        Angle (degrees) that brings each upper lid margin to its lower lid (l, r).
+    face_unit_ : float
+        Exocanthion distance in head sizes.
+
+    Example
+    -------
+    >>> model = ExpressionModel().fit(autobones.transfer("head.obj", landmarks="head.landmarks.json"))
+    >>> V = model.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
+    """
+
+    def __init__(self, definitions=None):
+        self.definitions = definitions
+
+    # ------------------------------------------------------------------------------ build
+    def fit(self, rig):
+        """Build wires, locators, constraints, lids and jaw weights on ``rig`` (a transferred
+        :class:`autobones.rig.Rig`, or any object with its attributes)."""
+        doc = load_expressions(self.definitions)
+        self.doc_ = doc
+        frame = rig.frame
+        self.frame_ = frame
+        V = np.asarray(rig.vertices, dtype=np.float64)
+        F = np.asarray(rig.faces, dtype=np.int64)
+        self.vertices_ = V
+        n = len(V)
+        Vc = frame.to_canonical(V)
+        self.canonical_ = Vc
+        names = list(rig.skeleton.names)
+        self.bones_ = names
+        self.pivots_ = frame.to_canonical(rig.skeleton.heads)
+        W = np.asarray(rig.weights, dtype=np.float64)
+        mj = muscles_from_rig(rig).transformed(frame.to_canonical, 1.0 / float(frame.size))
+        self.joints_ = mj
+        self.muscle_names_ = list(mj.names)
+        k = len(mj)
+        L = {kk: frame.to_canonical(np.asarray(v, dtype=np.float64).reshape(1, 3))[0]
+             for kk, v in (rig.extra.get("landmarks") or {}).items()}
+        eyes = {s: self.pivots_[names.index(f"eye_{s}")] for s in "lr" if f"eye_{s}" in names}
+        if "exocanthion_l" in L and "exocanthion_r" in L:
+            fu = float(np.linalg.norm(L["exocanthion_l"] - L["exocanthion_r"]))
+        elif len(eyes) == 2:
+            fu = 1.48 * float(np.linalg.norm(eyes["l"] - eyes["r"]))
+        else:
+            raise AutobonesError("expressions: the rig has neither exocanthion landmarks nor both eye bones "
+                                 "to measure the face by")
+        self.face_unit_ = fu
+        model = doc["model"]
+
+        # skin: the largest connected part, minus anything bound to an eye bone
+        from .fit import mesh_parts
+
+        part = mesh_parts(n, F)
+        skin = part == np.bincount(part).argmax()
+        for s in "lr":
+            if f"eye_{s}" in names:
+                skin &= W[:, names.index(f"eye_{s}")] < 0.5
+        self.skin_ = skin
+        N = vertex_normals(Vc, F)
+        self.normals_ = N
+        skin_idx = np.flatnonzero(skin)
+        tree = cKDTree(Vc[skin_idx])
+
+        def snap(P):
+            return skin_idx[tree.query(np.atleast_2d(P))[1]]
+
+        # --- the mouth line and its zone ---------------------------------------------------
+        ins = {nm: mj.insertions[i] for i, nm in enumerate(mj.names)}
+        ch_l = L.get("cheilion_l", ins.get("buccinator_l"))
+        ch_r = L.get("cheilion_r", ins.get("buccinator_r"))
+        if ch_l is None or ch_r is None:
+            raise AutobonesError("expressions: the rig has no cheilion landmarks or buccinator muscles "
+                                 "to find the mouth corners by")
+        st = L.get("stomion")
+        if st is None:
+            mid = 0.5 * (ch_l + ch_r)
+            near = skin & (np.abs(Vc[:, 0] - mid[0]) < 0.05 * fu) & (np.abs(Vc[:, 1] - mid[1]) < 0.1 * fu)
+            st = Vc[np.flatnonzero(near)[np.argmax(Vc[near, 2])]] if near.any() else mid
+        lips = model["lips"]
+        xs = np.array([ch_r[0], st[0], ch_l[0]])
+        order = np.argsort(xs)
+        y_line = np.interp(Vc[:, 0], xs[order], np.array([ch_r[1], st[1], ch_l[1]])[order])
+        s_mouth = Vc[:, 1] - y_line
+        hw = 0.5 * abs(ch_l[0] - ch_r[0])
+        dx = np.abs(Vc[:, 0] - st[0])
+        z_ch = 0.5 * (ch_l[2] + ch_r[2])
+        zh = float(lips["zone_height"]) * fu
+        zone = (_ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * _ramp(np.abs(s_mouth), zh, 0.6 * zh)
+                * _ramp(Vc[:, 2], z_ch - 0.12 * fu, z_ch - 0.06 * fu) * skin)
+        cut = float(lips["cut_width"]) * fu
+        upper = _ramp(s_mouth, -0.5 * cut, 0.5 * cut)
+        self.mouth_ = {"zone": zone, "upper": upper, "signed": s_mouth, "stomion": st}
+
+        # --- wires, locators, point constraints ---------------------------------------------
+        types = doc["muscle_types"]
+        rest_w = float(model["rest_weight"])
+        cross = float(model["cross_talk"])
+        cvs = int(model["cvs"])
+        infl = np.zeros((k, n))
+        for i, nm in enumerate(mj.names):
+            f = rig.fields.get(f"muscle/{nm}")
+            if f is not None:
+                infl[i] = np.asarray(f, dtype=np.float64).reshape(n)
+        dirs = mj.directions
+        G = np.zeros((k, n, 3))
+        total = np.zeros(n)
+        self.wires_ = []
+        for i, nm in enumerate(mj.names):
+            spec = types.get(mj.types[i])
+            if spec is None:
+                continue
+            o, ip = mj.origins[i], mj.insertions[i]
+            o_skin = Vc[snap(o)[0]]
+            t = np.linspace(float(spec["wire"][0]), float(spec["wire"][1]), cvs)
+            cv_idx = snap(o_skin[None] + t[:, None] * (ip - o_skin)[None])
+            Q = Vc[cv_idx]
+            # which lip the wire belongs to: its insertion inside the mouth zone's width
+            ins_dx = abs(ip[0] - st[0])
+            ins_s = ip[1] - np.interp(ip[0], xs[order], np.array([ch_r[1], st[1], ch_l[1]])[order])
+            if ins_dx < 0.9 * hw and abs(ins_s) > cut:
+                gate = 1.0 - zone * ((1.0 - upper) if ins_s > 0 else upper)
+                side = "upper" if ins_s > 0 else "lower"
+            else:
+                gate, side = None, "both"
+            d0 = float(spec["dropoff"]) * mj.widths[i]
+            Wm = wire_weights(Vc, Q, d0, gate=None if gate is None else gate * skin, tree=None) \
+                if gate is not None else wire_weights(Vc, Q, d0, gate=skin.astype(np.float64))
+            # point constraint per control vertex: own locator (001 profile), neighbours, rest
+            prof = np.where(t <= 1.0, np.sin(0.5 * np.pi * np.clip(t, 0, 1) ** 0.48),
+                            np.cos(0.5 * np.pi * np.clip((t - 1.0) / 0.25, 0.0, 1.0)))
+            cw = cross * infl[:, cv_idx].T                                   # (cvs, k)
+            cw[:, i] = prof
+            for j2, nm2 in enumerate(mj.names):                              # same-type muscles only pull their own side
+                if j2 != i and (mj.sides[j2] != mj.sides[i] and "m" not in (mj.sides[j2], mj.sides[i])):
+                    cw[:, j2] = 0.0
+            cw = cw / (rest_w + cw.sum(axis=1, keepdims=True))
+            for j2 in np.flatnonzero(cw.max(axis=0) > 0):
+                sh = float(types.get(mj.types[j2], {}).get("shortening", 0.0))
+                if sh == 0.0:
+                    continue
+                d = mj.locator_displacements(Q, j2) * (sh * cw[:, j2:j2 + 1])
+                G[j2] += Wm @ d
+            total += np.asarray(Wm.sum(axis=1)).ravel()
+            self.wires_.append({"muscle": nm, "base": Q, "vertices": cv_idx, "dropoff": d0, "side": side})
+        G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
+        self.muscle_basis_ = G
+        self.shortening_ = np.array([float(types.get(t_, {}).get("shortening", 0.0)) for t_ in mj.types])
+
+        # --- skull: soft-tissue thickness per region ----------------------------------------
+        skull = model["skull"]
+        thick = np.full(n, float(skull["default"]) * fu)
+        region = rig.fields.get("region")
+        if region is not None:
+            labels = list((rig.extra.get("field_labels") or {}).get("region", REGIONS_DEFAULT))
+            region = np.asarray(region).reshape(n).astype(np.int64)
+            for r_i, r_name in enumerate(labels):
+                if r_name in skull:
+                    thick[region == r_i] = float(skull[r_name]) * fu
+        self.thickness_ = thick
+
+        # --- creases ---------------------------------------------------------------------------
+        cr = model["creases"]
+        self.crease_basis_ = {}
+        for i, ty in enumerate(mj.types):
+            if ty.startswith("frontalis"):
+                lam, amp = float(cr["forehead_wavelength"]) * fu, float(cr["forehead_amplitude"]) * fu
+                phase = (Vc[:, 1] - mj.insertions[i][1]) / lam
+                furrow = 0.5 * (1.0 - np.cos(2.0 * np.pi * phase)) * (phase > 0.5)
+            elif ty in ("corrugator", "lateral_corrugator"):
+                lam, amp = float(cr["glabella_wavelength"]) * fu, float(cr["glabella_amplitude"]) * fu
+                furrow = 0.5 * (1.0 + np.cos(2.0 * np.pi * (Vc[:, 0] - st[0]) / lam)) * (np.abs(Vc[:, 0] - st[0]) < lam)
+            else:
+                continue
+            K = -(amp * infl[i] * furrow * skin)[:, None] * N
+            if np.any(K):
+                self.crease_basis_[i] = K
+
+        # --- eyelids ---------------------------------------------------------------------------
+        lid = model["eyelids"]
+        self.lid_weights_ = np.zeros((4, n))
+        self.lid_close_deg_ = np.zeros(2)
+        self.lid_pivots_ = np.zeros((2, 3))
+        for e, s in enumerate("lr"):
+            c = eyes.get(s)
+            if c is None:
+                continue
+            need = [f"{b}_{s}" for b in ("exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius")]
+            if all(nm_ in L for nm_ in need):
+                ex, en, ps, pi = (L[nm_] for nm_ in need)
+            else:
+                sign = 1.0 if s == "l" else -1.0
+                ex, en = c + [sign * 0.15 * fu, 0, 0.08 * fu], c + [-sign * 0.15 * fu, 0, 0.08 * fu]
+                ps, pi = c + [0, 0.05 * fu, 0.12 * fu], c + [0, -0.01 * fu, 0.12 * fu]
+            mid = 0.5 * (ps + pi)
+            gap = max(float(np.linalg.norm(ps - pi)), 1e-3 * fu)
+            xo = np.array([en[0], mid[0], ex[0]])
+            oo = np.argsort(xo)
+            y_f = np.interp(Vc[:, 0], xo[oo], np.array([en[1], mid[1], ex[1]])[oo])
+            s_f = Vc[:, 1] - y_f
+            a = float(lid["width_margin"]) * 0.5 * abs(ex[0] - en[0])
+            cx = 0.5 * (ex[0] + en[0])
+            front = _ramp(Vc[:, 2], c[2] - 0.02 * fu, c[2] + 0.04 * fu)
+            ru = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["upper_height"]) * fu)) ** 2)
+            rl = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["lower_height"]) * fu)) ** 2)
+            is_open = tree.query(mid)[0] > 0.25 * gap
+            if is_open:
+                up_step, low_step = _ramp(s_f, 0.0, 0.15 * gap), _ramp(-s_f, 0.0, 0.15 * gap)
+            else:  # closed lids (one surface across the fissure): spread so nothing folds over
+                up_step, low_step = _ramp(s_f, -0.5 * gap, 1.5 * gap), _ramp(-s_f, -0.5 * gap, 1.5 * gap)
+            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin
+            self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin
+            phi = lambda p: np.arctan2(p[1] - c[1], p[2] - c[2])  # noqa: E731
+            self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
+            self.lid_pivots_[e] = c
+        self.lid_lower_range_ = float(lid["lower_range"])
+
+        # --- jaw weights sharpened across the mouth line -------------------------------------
+        Wj = W.copy()
+        if "jaw" in names:
+            j = names.index("jaw")
+            jaw_new = (1.0 - zone) * W[:, j] + zone * (1.0 - upper)
+            others = np.delete(np.arange(W.shape[1]), j)
+            rest = W[:, others].sum(axis=1)
+            want = 1.0 - jaw_new
+            scale = np.where(rest > 1e-12, want / np.maximum(rest, 1e-12), 0.0)
+            Wj[:, others] = W[:, others] * scale[:, None]
+            if "head" in names:
+                h = names.index("head")
+                Wj[:, h] += np.where(rest > 1e-12, 0.0, want)
+            Wj[:, j] = jaw_new
+        self.jaw_weights_ = Wj
+        return self
+
+    # ------------------------------------------------------------------------------ parameters
+    def _check(self):
+        if not hasattr(self, "muscle_basis_"):
+            raise AutobonesError("ExpressionModel: call fit(rig) before posing")
+
+    @property
+    def action_units(self):
+        """AU number (str) -> definition, as in the data file."""
+        return self.doc_["action_units"]
+
+    @property
+    def expressions(self):
+        """Emotion prototype name -> definition."""
+        return self.doc_["expressions"]
+
+    def parameters(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None):
+        """The model's own parameters for a mix of AUs, an expression and direct muscle values.
+
+        Parameters
+        ----------
+        au : dict, optional
+            AU -> intensity (usually 0..1); keys ``12``, ``"12"``, ``"AU12"``, and
+            ``"12L"`` / ``"12R"`` for one side (the subject's left / right).
+        expression : str or dict, optional
+            An emotion prototype (``"happiness"``...) at intensity 1, or name -> intensity.
+        muscles : dict, optional
+            Muscle name (``zygomaticus_major_l``) or type (both sides) -> contraction,
+            added to what the AUs give.
+        jaw_deg : float
+            Extra jaw opening, degrees.
+        eyelids : dict, optional
+            ``upper``/``lower`` (both eyes) or ``upper_l``... -> amount (upper 1 closes).
+
+        Returns
+        -------
+        dict
+            ``contractions`` (k,) float in :attr:`muscle_names_` order, ``jaw_deg`` float,
+            ``eyelids`` (4,) float in :data:`LIDS` order.
+        """
+        self._check()
+        c = np.zeros(len(self.muscle_names_))
+        lids = np.zeros(4)
+        jaw = float(jaw_deg)
+        mix = {}
+        if expression is not None:
+            ex = {expression: 1.0} if isinstance(expression, str) else dict(expression)
+            for name, a in ex.items():
+                if name not in self.expressions:
+                    raise AutobonesError(f"unknown expression {name!r}; known: {', '.join(self.expressions)}")
+                for k_, v in self.expressions[name]["au"].items():
+                    mix[str(k_)] = mix.get(str(k_), 0.0) + float(a) * float(v)
+        for k_, v in (au or {}).items():
+            key = str(k_).upper().removeprefix("AU")
+            mix[key] = mix.get(key, 0.0) + float(v)
+        for key, a in mix.items():
+            side = None
+            if key[-1:] in ("L", "R"):
+                key, side = key[:-1], key[-1].lower()
+            if key not in self.action_units:
+                raise AutobonesError(f"unknown action unit {key!r}; defined: "
+                                     f"{', '.join(sorted(self.action_units, key=int))}")
+            if not np.isfinite(a):
+                raise AutobonesError(f"action unit {key}: intensity {a} is not a finite number")
+            d = self.action_units[key]
+            for m, v in d.get("muscles", {}).items():
+                c += a * float(v) * self._muscle_mask(m, side)
+            jaw += a * float(d.get("jaw_deg", 0.0)) * (1.0 if side is None else 0.5)
+            for part, v in d.get("eyelids", {}).items():
+                lids += a * float(v) * self._lid_mask(part, side)
+        for m, v in (muscles or {}).items():
+            c += float(v) * self._muscle_mask(m, None)
+        for part, v in (eyelids or {}).items():
+            lids += float(v) * self._lid_mask(part, None)
+        if not (np.isfinite(c).all() and np.isfinite(lids).all() and np.isfinite(jaw)):
+            raise AutobonesError("expression parameters must be finite numbers")
+        return {"contractions": c, "jaw_deg": jaw, "eyelids": lids}
+
+    def _muscle_mask(self, m, side):
+        mj = self.joints_
+        if m in mj.names:
+            mask = np.array([n == m for n in mj.names], dtype=np.float64)
+        else:
+            mask = np.array([t == m for t in mj.types], dtype=np.float64)
+            if not mask.any():
+                raise AutobonesError(f"unknown muscle {m!r}; the rig has: {', '.join(mj.names)}")
+        if side is not None:
+            mask *= np.array([s == side for s in mj.sides], dtype=np.float64)
+        return mask
+
+    def _lid_mask(self, part, side):
+        names = [p for p in LIDS if p == part or p.split("_")[0] == part]
+        if not names:
+            raise AutobonesError(f"unknown eyelid {part!r}; use upper, lower or one of {', '.join(LIDS)}")
+        if side is not None:
+            names = [p for p in names if p.endswith("_" + side)]
+        return np.array([float(p in names) for p in LIDS])
+
+    # ------------------------------------------------------------------------------ posing
+    def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
+             head_deg=None, neck_deg=None):
+        """Posed vertices for AUs / an expression / muscle contractions plus bone controls.
+
+        Parameters
+        ----------
+        au, expression, muscles, jaw_deg, eyelids
+            See :meth:`parameters`.
+        gaze : (yaw_deg, pitch_deg), optional
+            Both eyes turned toward the subject's left (yaw > 0) and up (pitch > 0).
+        look_at : (3,) float, optional
+            A point in the input frame and units both eyes aim at (000's aim control;
+            the eyes keep their rest divergence).
+        head_deg, neck_deg : (pitch, yaw, roll) degrees, optional
+            Rotations about the canonical +X (pitch > 0 nods down), +Y (yaw > 0 turns to
+            the subject's left) and +Z axes at the head / neck pivots.
+
+        Returns
+        -------
+        (n, 3) float
+            Vertices in the input frame and units; exactly ``rig.vertices`` when every
+            parameter is 0.
+        """
+        p = self.parameters(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg, eyelids=eyelids)
+        return self.pose_parameters(p["contractions"], jaw_deg=p["jaw_deg"], eyelids=p["eyelids"], gaze=gaze,
+                                    look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
+
+    def pose_parameters(self, contractions, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None,
+                        neck_deg=None):
+        """Posed vertices from the raw parameter vector (what a fit searches over).
+
+        Parameters
+        ----------
+        contractions : (k,) float
+            Muscle contractions in :attr:`muscle_names_` order (1 = the muscle type's
+            ``shortening``).
+        jaw_deg : float
+            Jaw opening, degrees.
+        eyelids : (4,) float, optional
+            Lid amounts in :data:`LIDS` order.
+        gaze, look_at, head_deg, neck_deg
+            See :meth:`pose`.
+
+        Returns
+        -------
+        (n, 3) float
+            Vertices in the input frame and units.
+        """
+        self._check()
+        c = np.asarray(contractions, dtype=np.float64).reshape(-1)
+        if c.shape != (len(self.muscle_names_),):
+            raise AutobonesError(f"contractions: expected {len(self.muscle_names_)} values, got {c.shape}")
+        Vc, N = self.canonical_, self.normals_
+        d = np.tensordot(c, self.muscle_basis_, axes=1) if np.any(c) else np.zeros_like(Vc)
+        # skull non-penetration: sink at most the soft-tissue thickness along the rest normal
+        if np.any(c):
+            depth = (d * N).sum(axis=1)
+            over = -self.thickness_ - depth
+            hit = over > 0
+            d[hit] += over[hit, None] * N[hit]
+            for i, K in self.crease_basis_.items():
+                if c[i] != 0:
+                    d += c[i] * K
+        # eyelids: four lid joints rotating about the eye pivots (canonical +X axis)
+        lids = np.zeros(4) if eyelids is None else np.asarray(eyelids, dtype=np.float64).reshape(4)
+        for q in np.flatnonzero(lids):
+            e = q % 2
+            w = self.lid_weights_[q]
+            rows = np.flatnonzero(w > 0)
+            if len(rows) == 0:
+                continue
+            ang = np.radians(self.lid_close_deg_[e]) * lids[q] * w[rows]
+            if q >= 2:
+                ang = -self.lid_lower_range_ * ang
+            P = Vc[rows] + d[rows] - self.lid_pivots_[e]
+            ca, sa = np.cos(ang), np.sin(ang)
+            d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
+            d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
+        # bones: neck -> head -> {jaw, eyes}, linear blend skinning with the sharpened jaw weights
+        R = self._bone_transforms(jaw_deg, gaze, look_at, head_deg, neck_deg)
+        if R:
+            P = Vc + d
+            W = self.jaw_weights_
+            for b, (Rb, tb) in R.items():
+                w = W[:, b]
+                rows = np.flatnonzero(w != 0)
+                if len(rows):
+                    d[rows] += w[rows, None] * (P[rows] @ (Rb - np.eye(3)).T + tb)
+        return self.vertices_ + (d * self.frame_.size) @ self.frame_.rotation
+
+    def _bone_transforms(self, jaw_deg, gaze, look_at, head_deg, neck_deg):
+        """World transforms (R, t) of the bones that move, canonical frame: x -> R x + t."""
+        names, piv = self.bones_, self.pivots_
+        moves = {}
+
+        def local(name, R):
+            c = piv[names.index(name)]
+            return R, c - R @ c
+
+        def need(name, what):
+            if name not in names:
+                raise AutobonesError(f"{what}: the rig has no {name!r} bone")
+
+        world = {}
+        base = (np.eye(3), np.zeros(3))
+        if neck_deg is not None and np.any(np.asarray(neck_deg, dtype=float)):
+            need("neck", "neck_deg")
+            base = local("neck", _euler(neck_deg))
+            world["neck"] = base
+        if head_deg is not None and np.any(np.asarray(head_deg, dtype=float)):
+            need("head", "head_deg")
+            Rh, th = local("head", _euler(head_deg))
+            base = (base[0] @ Rh, base[0] @ th + base[1])
+        if "head" in names and (np.any(base[0] != np.eye(3)) or np.any(base[1])):
+            world["head"] = base
+        if jaw_deg:
+            need("jaw", "jaw_deg")
+            Rj, tj = local("jaw", _rot(0, jaw_deg))
+            world["jaw"] = (base[0] @ Rj, base[0] @ tj + base[1])
+        elif "jaw" in names and "head" in world:
+            world["jaw"] = base
+        for s in "lr":
+            eye = f"eye_{s}"
+            Re = None
+            if look_at is not None:
+                need(eye, "look_at")
+                tgt = self.frame_.to_canonical(np.asarray(look_at, dtype=np.float64).reshape(1, 3))[0]
+                # the target is given in the posed world: bring it into the head's rest frame
+                tgt = base[0].T @ (tgt - base[1])
+                dvec = tgt - piv[names.index(eye)]
+                Re = _align(np.array([0.0, 0.0, 1.0]), dvec / max(np.linalg.norm(dvec), 1e-300))
+            elif gaze is not None and np.any(np.asarray(gaze, dtype=float)):
+                need(eye, "gaze")
+                yaw, pitch = (list(np.ravel(gaze).astype(float)) + [0.0])[:2]
+                Re = _rot(1, yaw) @ _rot(0, -pitch)
+            if Re is not None:
+                Rl, tl = local(eye, Re)
+                world[eye] = (base[0] @ Rl, base[0] @ tl + base[1])
+            elif eye in names and "head" in world:
+                world[eye] = base
+        for name, T in world.items():
+            moves[names.index(name)] = T
+        return moves
+
+
+def flipped_faces(V0, V1, F):
+    """Boolean (m,): triangles whose normal turned by more than 90 degrees from ``V0`` to ``V1``
+    (degenerate rest triangles never count)."""
+    n0 = np.cross(V0[F[:, 1]] - V0[F[:, 0]], V0[F[:, 2]] - V0[F[:, 0]])
+    n1 = np.cross(V1[F[:, 1]] - V1[F[:, 0]], V1[F[:, 2]] - V1[F[:, 0]])
+    ok = np.linalg.norm(n0, axis=1) > 0
+    return ok & ((n0 * n1).sum(axis=1) <= 0)

@@ -1,0 +1,119 @@
+"""Muscle joints: origin, insertion and contraction (seed 000 §4.2).
+
+A muscle is a joint from its origin under the skin to its insertion on the skin;
+a contraction is a scaling about the origin along the origin -> insertion
+direction. A point q riding the joint (000's locators, parented to the joint)
+moves, for a contraction that shortens the muscle by the fraction s, by
+
+    -s ((q - o) . u) u,         u = (i - o) / |i - o|,
+
+which is linear in s: that is what keeps the whole skin/muscle model linear in the
+contractions (``expressions.ExpressionModel``). A negative s lengthens the joint
+(000 swaps the mentalis ends so that its contraction pushes; here a definition may
+simply use a negative shortening).
+
+The joints of a transferred rig are in ``rig.extra['muscles']`` (origin and
+insertion in the head's input frame; ``width_canonical`` in head sizes).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import AutobonesError
+
+
+@dataclass
+class MuscleJoints:
+    """The muscles of one head as arrays, all in the same frame and units.
+
+    Attributes
+    ----------
+    names, types, sides : list of str
+        ``zygomaticus_major_l``, ``zygomaticus_major``, ``l`` (``l``, ``r`` or ``m``).
+    origins, insertions : (k, 3) float
+        Joint ends.
+    widths : (k,) float
+        Influence radius across the muscle line (seed 001's width), same units.
+    """
+
+    names: list
+    types: list
+    sides: list
+    origins: np.ndarray
+    insertions: np.ndarray
+    widths: np.ndarray
+
+    def __len__(self):
+        return len(self.names)
+
+    @property
+    def directions(self):
+        """(k, 3) unit origin -> insertion directions."""
+        d = self.insertions - self.origins
+        return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+
+    @property
+    def lengths(self):
+        """(k,) rest lengths."""
+        return np.linalg.norm(self.insertions - self.origins, axis=1)
+
+    def transformed(self, fn, scale):
+        """A copy with ``fn`` ((k, 3) -> (k, 3)) applied to the ends and widths times ``scale``."""
+        return MuscleJoints(list(self.names), list(self.types), list(self.sides), fn(self.origins),
+                            fn(self.insertions), self.widths * scale)
+
+    def locator_displacements(self, Q, muscle):
+        """Unit-contraction displacement of locators riding one muscle joint.
+
+        Parameters
+        ----------
+        Q : (p, 3) float
+            Locator rest positions (same frame as the joints).
+        muscle : int
+            Muscle index.
+
+        Returns
+        -------
+        (p, 3) float
+            Displacement per unit shortening: ``-((q - o) . u) u``; multiply by the
+            shortening fraction s.
+        """
+        o, u = self.origins[muscle], self.directions[muscle]
+        return -((np.asarray(Q, dtype=np.float64) - o) @ u)[:, None] * u[None, :]
+
+    def contract(self, Q, muscle, shortening):
+        """Locators ``Q`` (p, 3) moved by a contraction of ``muscle`` shortening it by the
+        fraction ``shortening`` (0: rest, 0.2: 20% shorter, negative: longer)."""
+        return np.asarray(Q, dtype=np.float64) + shortening * self.locator_displacements(Q, muscle)
+
+
+def muscles_from_rig(rig):
+    """The :class:`MuscleJoints` of a transferred rig, in its input frame and units.
+
+    Reads ``rig.extra['muscles']`` (each with ``name``, ``type``, ``side``, ``origin``,
+    ``insertion`` and ``width_canonical`` in head sizes, or ``width`` in mesh units).
+    """
+    muscles = (getattr(rig, "extra", None) or {}).get("muscles") or getattr(rig, "muscles", None)
+    if not muscles:
+        raise AutobonesError("this rig has no muscles: expressions need a rig made by "
+                             "autobones.transfer (or its saved glb with the .rig.json sidecar)")
+    size = float(rig.frame.size) if getattr(rig, "frame", None) is not None else 1.0
+    names, types, sides, O, I, W = [], [], [], [], [], []
+    for m in muscles:
+        try:
+            names.append(str(m["name"]))
+            types.append(str(m.get("type", m["name"])))
+            sides.append(str(m.get("side", "m")))
+            O.append(np.asarray(m["origin"], dtype=np.float64))
+            I.append(np.asarray(m["insertion"], dtype=np.float64))
+            W.append(float(m["width_canonical"]) * size if "width_canonical" in m else float(m["width"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise AutobonesError(f"muscle {m.get('name', '?')!r}: incomplete definition ({exc})") from None
+    O, I = np.array(O), np.array(I)
+    if not (np.isfinite(O).all() and np.isfinite(I).all()):
+        raise AutobonesError("the rig's muscles have non-finite origins or insertions")
+    if (np.linalg.norm(I - O, axis=1) <= 0).any():
+        raise AutobonesError("a muscle of the rig has its origin on its insertion (zero length)")
+    return MuscleJoints(names, types, sides, O, I, np.array(W))
