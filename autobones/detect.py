@@ -360,9 +360,11 @@ class LandmarkDetector:
             if N is None:
                 from .render import vertex_normals
                 N = vertex_normals(Vc, F)
+                # outward normals whichever way the file winds its triangles
+                N *= 1.0 if ((Vc - Vc.mean(axis=0)) * N).sum() >= 0 else -1.0
             # how squarely the view sees each point: grazing views lift badly
             _, near = cKDTree(Vc).query(np.nan_to_num(P))
-            facing = np.abs(N[near] @ d)            # two-sided: scans come with either winding
+            facing = np.clip(N[near] @ d, 0.0, 1.0)
             cands.append(P)
             weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** 2, 0.0))
         if not cands:
