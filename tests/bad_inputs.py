@@ -183,7 +183,8 @@ def landmark_cases():
     add("lm_empty", b"", "failed", "empty", "an empty landmark file")
     add("lm_garbage", b"<point name=\"vertex\" x=\"1\" y=\"2\" z=\"3\"/> <<<&&&", "failed", "", "a broken .pp",
         suffix=".pp")
-    add("lm_missing", None, "failed", "no landmark file", "no landmark file beside the mesh")
+    add("lm_missing", None, "failed", "no face found",
+        "no landmark file beside a robot: automatic landmarks find no face there")
     return out
 
 
