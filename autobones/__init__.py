@@ -18,6 +18,7 @@ from .transfer import transfer
 from .attributes import transfer_attributes
 from .labelled_rig import LabelledRig
 from .detect import detect_landmarks
+from .expressions import ExpressionModel
 
 
 def build_rig(base, landmarks, **kwargs):
@@ -31,5 +32,5 @@ def build_rig(base, landmarks, **kwargs):
     lm, _ = resolve_landmarks(landmarks)
     return _build(V, F, lm, **kwargs)
 
-__all__ = ["AutobonesError", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh",
+__all__ = ["AutobonesError", "ExpressionModel", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh",
            "place", "transfer", "transfer_attributes", "__version__"]

@@ -189,6 +189,16 @@ class ExpressionModel:
         self.skin_ = skin
         N = vertex_normals(Vc, F)
         self.normals_ = N
+        # the offset skull is smooth: its directions are the skin normals smoothed over ~1 cm
+        Ns = N.copy()
+        import scipy.sparse as sp
+
+        E0 = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+        A0 = sp.csr_matrix((np.ones(2 * len(E0)), (np.r_[E0[:, 0], E0[:, 1]], np.r_[E0[:, 1], E0[:, 0]])), shape=(n, n))
+        for _ in range(int(model.get("skull_smoothing_passes", 10))):
+            Ns = A0 @ Ns + Ns
+        Ns /= np.maximum(np.linalg.norm(Ns, axis=1, keepdims=True), 1e-300)
+        self.skull_normals_ = Ns
         skin_idx = np.flatnonzero(skin)
         tree = cKDTree(Vc[skin_idx])
 
@@ -211,13 +221,21 @@ class ExpressionModel:
         xs = np.array([ch_r[0], st[0], ch_l[0]])
         order = np.argsort(xs)
         y_line = np.interp(Vc[:, 0], xs[order], np.array([ch_r[1], st[1], ch_l[1]])[order])
-        s_mouth = Vc[:, 1] - y_line
+        # in the mouth groove the lip surfaces face each other: a downward normal is the upper
+        # lip's underside, an upward one the lower lip's top, whatever the straight line says
+        s_mouth = Vc[:, 1] - y_line - float(lips.get("normal_bias", 0.03)) * fu * N[:, 1]
         hw = 0.5 * abs(ch_l[0] - ch_r[0])
         dx = np.abs(Vc[:, 0] - st[0])
         z_ch = 0.5 * (ch_l[2] + ch_r[2])
         zh = float(lips["zone_height"]) * fu
         zone = (_ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * _ramp(np.abs(s_mouth), zh, 0.6 * zh)
-                * _ramp(Vc[:, 2], z_ch - 0.12 * fu, z_ch - 0.06 * fu) * skin)
+                * _ramp(Vc[:, 2], z_ch - 0.4 * fu, z_ch - 0.3 * fu) * skin)
+        # the mouth's lining (skin behind the lips facing into the head, e.g. ICT's mouth sock)
+        # splits by the same line, over its whole depth and height
+        centre = self.pivots_[names.index("head")] if "head" in names else Vc.mean(axis=0)
+        inward = (N * (Vc - centre)).sum(axis=1) < 0
+        lining = (inward & skin & (dx < 1.5 * hw) & (np.abs(s_mouth) < 4.0 * zh) & (Vc[:, 2] > z_ch - 1.0 * fu))
+        zone = np.where(lining, _ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw), zone)
         cut = float(lips["cut_width"]) * fu
         upper = _ramp(s_mouth, -0.5 * cut, 0.5 * cut)
         self.mouth_ = {"zone": zone, "upper": upper, "signed": s_mouth, "stomion": st}
@@ -273,7 +291,25 @@ class ExpressionModel:
                 G[j2] += Wm @ d
             total += np.asarray(Wm.sum(axis=1)).ravel()
             self.wires_.append({"muscle": nm, "base": Q, "vertices": cv_idx, "dropoff": d0, "side": side})
-        G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
+        # a few smoothing passes over the skin graph, never across the mouth line, so the wires'
+        # dropoffs do not fold the small triangles of the mouth corners
+        passes = int(model.get("smoothing_passes", 8))
+        if passes:
+            import scipy.sparse as sp
+
+            E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+            keep = skin[E[:, 0]] & skin[E[:, 1]]
+            across = (np.maximum(zone[E[:, 0]], zone[E[:, 1]]) > 0.1) & (np.abs(upper[E[:, 0]] - upper[E[:, 1]]) > 0.5)
+            E = E[keep & ~across]
+            A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
+            deg = np.asarray(A.sum(axis=1)).ravel()
+            Sm = sp.diags(np.where(deg > 0, 0.5 / np.maximum(deg, 1), 0.0)) @ A + sp.diags(np.where(deg > 0, 0.5, 1.0))
+            flat = G.transpose(1, 0, 2).reshape(n, -1)
+            for _ in range(passes):
+                flat = Sm @ flat
+            G = np.ascontiguousarray(flat.reshape(n, k, 3).transpose(1, 0, 2))
+        if bool(model.get("normalise_overlaps", False)):
+            G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
         self.muscle_basis_ = G
         self.shortening_ = np.array([float(types.get(t_, {}).get("shortening", 0.0)) for t_ in mj.types])
 
@@ -288,6 +324,9 @@ class ExpressionModel:
                 if r_name in skull:
                     thick[region == r_i] = float(skull[r_name]) * fu
         self.thickness_ = thick
+        # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
+        # surfaces face each other) nor under skin whose normal points into the head
+        self.clamp_ = (zone < 0.05) & ~inward
 
         # --- creases ---------------------------------------------------------------------------
         cr = model["creases"]
@@ -338,8 +377,11 @@ class ExpressionModel:
                 up_step, low_step = _ramp(s_f, 0.0, 0.15 * gap), _ramp(-s_f, 0.0, 0.15 * gap)
             else:  # closed lids (one surface across the fissure): spread so nothing folds over
                 up_step, low_step = _ramp(s_f, -0.5 * gap, 1.5 * gap), _ramp(-s_f, -0.5 * gap, 1.5 * gap)
-            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin
-            self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin
+            # the fissure opens as 1 - u^2 between the corners, so the lid joints turn less there
+            u = (Vc[:, 0] - cx) / (0.5 * abs(ex[0] - en[0]))
+            h = np.clip(1.0 - u * u, 0.0, 1.0) ** 2
+            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin * h
+            self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin * h
             phi = lambda p: np.arctan2(p[1] - c[1], p[2] - c[2])  # noqa: E731
             self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
             self.lid_pivots_[e] = c
@@ -349,7 +391,15 @@ class ExpressionModel:
         Wj = W.copy()
         if "jaw" in names:
             j = names.index("jaw")
-            jaw_new = (1.0 - zone) * W[:, j] + zone * (1.0 - upper)
+            # under the chin the jaw swings toward the neck: spread its weight there so the skin
+            # stretches instead of folding (heat diffusion, as build_rig smooths it)
+            from .build_rig import _diffuse, _laplacian
+
+            spread = float(model.get("jaw_spread", 0.15)) * fu
+            jaw_s = np.clip(_diffuse(W[:, j], *_laplacian(Vc, F), t=spread ** 2), 0.0, 1.0) if spread > 0 else W[:, j]
+            below = _ramp(s_mouth, 0.0, -0.1 * fu) * skin
+            jaw_b = (1.0 - below) * W[:, j] + below * jaw_s
+            jaw_new = (1.0 - zone) * jaw_b + zone * (1.0 - upper)
             others = np.delete(np.arange(W.shape[1]), j)
             rest = W[:, others].sum(axis=1)
             want = 1.0 - jaw_new
@@ -516,10 +566,11 @@ class ExpressionModel:
         d = np.tensordot(c, self.muscle_basis_, axes=1) if np.any(c) else np.zeros_like(Vc)
         # skull non-penetration: sink at most the soft-tissue thickness along the rest normal
         if np.any(c):
-            depth = (d * N).sum(axis=1)
+            Ns = self.skull_normals_
+            depth = (d * Ns).sum(axis=1)
             over = -self.thickness_ - depth
-            hit = over > 0
-            d[hit] += over[hit, None] * N[hit]
+            hit = (over > 0) & self.clamp_
+            d[hit] += over[hit, None] * Ns[hit]
             for i, K in self.crease_basis_.items():
                 if c[i] != 0:
                     d += c[i] * K

@@ -108,6 +108,27 @@ class Rig:
             out.append((f"muscle/{m['name']}/insertion", names[int(np.argmax(self.weights[v]))], m["insertion"]))
         return out
 
+    def expression_model(self, definitions=None):
+        """The :class:`autobones.expressions.ExpressionModel` of this rig (built on first use and
+        kept; needs the muscles of ``transfer``)."""
+        from .expressions import ExpressionModel
+
+        cached = self.__dict__.get("_expression_model")
+        if cached is None or cached.definitions is not definitions:
+            cached = ExpressionModel(definitions).fit(self)
+            self.__dict__["_expression_model"] = cached
+        return cached
+
+    def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
+             head_deg=None, neck_deg=None):
+        """Posed vertices (n, 3), input frame and units: FACS action units (``au={12: 0.8}``,
+        ``"12L"`` for one side), an emotion (``expression="happiness"``), muscle contractions,
+        jaw opening in degrees, eyelids, eye gaze and head/neck rotations; see
+        :meth:`autobones.expressions.ExpressionModel.pose`. All zero: the vertices, exactly."""
+        return self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
+                                            eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
+                                            neck_deg=neck_deg)
+
     def save(self, path):
         """Write ``path`` (.glb), its ``.rig.json`` sidecar and ``.weights.npz``.
 

@@ -1,0 +1,240 @@
+"""autobones.expressions (seed 000 §4.2 skin/muscle model, FACS AUs of seed 002), wire.py, muscles.py."""
+import time
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import autobones
+from autobones.errors import AutobonesError
+from autobones.expressions import ExpressionModel, flipped_faces, load_expressions
+from autobones.muscles import muscles_from_rig
+from autobones.wire import WireDeformer, dropoff, wire_weights
+
+from shared_data import ROOT, data
+
+HEADS = {
+    "default": (None, ROOT / "generic_rig" / "default_head.landmarks.json"),
+    "ict": (data("ict/identity002.obj"), data("ict/identity002.landmarks.json")),
+}
+DOC = load_expressions()
+AUS = sorted(DOC["action_units"], key=int)
+EMOTIONS = sorted(DOC["expressions"])
+
+
+@pytest.fixture(scope="module")
+def model():
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            rig = autobones.transfer(*HEADS[name])
+            cache[name] = (rig, ExpressionModel().fit(rig))
+        return cache[name]
+
+    return get
+
+
+def _nearest(rig, model, point):
+    """Index of the skin vertex nearest an input-frame point."""
+    idx = np.flatnonzero(model.skin_)
+    return idx[cKDTree(rig.vertices[idx]).query(np.asarray(point, dtype=np.float64))[1]]
+
+
+# ------------------------------------------------------------------------------ wire, muscles
+
+
+def test_wire_moves_points_on_the_base_wire_fully_and_nothing_beyond_the_dropoff():
+    x = np.linspace(-2, 2, 41)
+    V = np.array([[a, b, 0.0] for a in x for b in x])
+    base = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    w = WireDeformer(0.5).fit(V, base)
+    moved = base + [[0.0, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.0]]
+    d = w.displacement(moved)
+    on = np.flatnonzero((np.abs(V[:, 1]) < 1e-12) & (np.abs(V[:, 0]) < 1e-12))
+    assert np.allclose(d[on], [0.0, 0.3, 0.0])
+    # halfway along a segment: half the control vertex displacement
+    half = np.flatnonzero(np.isclose(V[:, 0], 0.5) & (np.abs(V[:, 1]) < 1e-12))
+    assert np.allclose(d[half], [0.0, 0.15, 0.0])
+    far = np.abs(V[:, 1]) >= 0.5
+    assert not d[far].any()
+    assert np.isclose(dropoff(0.5), (1 - 0.25) ** 2) and dropoff(1.0) == 0.0 and dropoff(0.0) == 1.0
+    # linear in the deforming wire
+    assert np.allclose(w.displacement(base + 2 * (moved - base)), 2 * d)
+    with pytest.raises(AutobonesError):
+        wire_weights(V, base[:1], 0.5)
+
+
+def test_muscle_contraction_scales_about_the_origin(model):
+    rig, _ = model("default")
+    mj = muscles_from_rig(rig)
+    i = mj.names.index("zygomaticus_major_l")
+    q = mj.contract(mj.insertions[i:i + 1], i, 0.25)[0]
+    assert np.allclose(q, mj.origins[i] + 0.75 * (mj.insertions[i] - mj.origins[i]))
+    assert np.allclose(mj.contract(mj.origins[i:i + 1], i, 0.5)[0], mj.origins[i])
+
+
+# ------------------------------------------------------------------------------ the model
+
+
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_zero_is_the_neutral_mesh_exactly(model, name):
+    rig, m = model(name)
+    assert np.array_equal(m.pose(), rig.vertices)
+    assert np.array_equal(m.pose(au={12: 0.0, "4": 0, "26": 0}, jaw_deg=0, gaze=(0, 0)), rig.vertices)
+    assert np.array_equal(m.pose(expression={"happiness": 0.0}), rig.vertices)
+    assert np.array_equal(rig.pose(au={12: 0}), rig.vertices)
+
+
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_left_only_au12_leaves_the_right_half_still(model, name):
+    rig, m = model(name)
+    d = np.linalg.norm(m.pose(au={"12L": 1.0}) - rig.vertices, axis=1)
+    x = m.canonical_[:, 0]
+    left, right = d[x > 0].sum(), d[x < 0].sum()
+    assert left > 0 and right < 0.02 * left, (left, right)
+    # and it really is a smile: the left mouth corner goes up and out
+    lm = rig.extra["landmarks"]
+    c = _nearest(rig, m, lm["cheilion_l"])
+    move = rig.frame.to_canonical(m.pose(au={"12L": 1.0})[c:c + 1]) - m.canonical_[c:c + 1]
+    assert move[0, 1] > 0.02 * m.face_unit_ and move[0, 0] > 0, move / m.face_unit_
+
+
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_au4_leaves_the_mouth_still(model, name):
+    """Mouth: skin within 0.35 fu of the stomion; its largest displacement stays under 2% of the
+    brows' largest."""
+    rig, m = model(name)
+    d = np.linalg.norm(m.pose(au={4: 1.0}) - rig.vertices, axis=1) / rig.frame.size
+    st = m.mouth_["stomion"]
+    mouth = np.linalg.norm(m.canonical_ - st, axis=1) < 0.35 * m.face_unit_
+    lm = rig.extra["landmarks"]
+    brows = [_nearest(rig, m, lm[f"brow_{p}_{s}"]) for p in ("inner", "middle") for s in "lr"]
+    assert d[brows].max() > 0.02 * m.face_unit_
+    assert d[mouth].max() < 0.02 * d[brows].max(), (d[mouth].max(), d[brows].max())
+
+
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_jaw_opens_the_lower_lip_only(model, name):
+    rig, m = model(name)
+    lm = rig.extra["landmarks"]
+    V = rig.frame.to_canonical(m.pose(jaw_deg=15.0))
+    lo, up = _nearest(rig, m, lm["labiale_inferius"]), _nearest(rig, m, lm["labiale_superius"])
+    d_lo = V[lo] - m.canonical_[lo]
+    d_up = np.linalg.norm(V[up] - m.canonical_[up])
+    assert d_lo[1] < -0.08 * m.face_unit_, d_lo / m.face_unit_
+    assert d_up < 0.05 * np.linalg.norm(d_lo), (d_up, np.linalg.norm(d_lo))
+    # AU26 (jaw drop) parts the lips the same way
+    V26 = rig.frame.to_canonical(m.pose(au={26: 1.0}))
+    assert V26[lo, 1] - V26[up, 1] < m.canonical_[lo, 1] - m.canonical_[up, 1] - 0.05 * m.face_unit_
+
+
+def test_au43_closes_the_eyelids(model):
+    """ICT's eyes are open: each upper lid margin comes down onto its lower lid."""
+    rig, m = model("ict")
+    lm = rig.extra["landmarks"]
+    V = m.pose(au={43: 1.0})
+    for s in "lr":
+        ps, pi = np.asarray(lm[f"palpebrale_superius_{s}"]), np.asarray(lm[f"palpebrale_inferius_{s}"])
+        gap = np.linalg.norm(ps - pi)
+        top = _nearest(rig, m, ps)
+        before = np.linalg.norm(rig.vertices[top] - pi)
+        after = np.linalg.norm(V[top] - pi)
+        assert after < 0.25 * before and after < 0.3 * gap, (s, before, after, gap)
+    # AU5 opens them wider, and the lids alone leave the rest of the face alone
+    top = _nearest(rig, m, lm["palpebrale_superius_l"])
+    assert m.pose(au={5: 1.0})[top] @ rig.frame.rotation[1] > rig.vertices[top] @ rig.frame.rotation[1]
+    d = np.linalg.norm(V - rig.vertices, axis=1)
+    far = np.linalg.norm(m.canonical_ - m.mouth_["stomion"], axis=1) < 0.4 * m.face_unit_
+    assert not d[far].any()
+
+
+def test_eyes_gaze_with_the_aim_control(model):
+    rig, m = model("ict")
+    eye = rig.skeleton.names.index("eye_l")
+    ball = np.flatnonzero(rig.weights[:, eye] > 0.99)
+    assert len(ball) > 50
+    pivot = rig.skeleton.heads[eye]
+    front = rig.frame.rotation[2]
+    left = rig.frame.rotation[0]
+    # looking at a point far to the subject's left turns the eyeball's front that way
+    target = pivot + 10 * rig.frame.size * (front + left)
+    V = m.pose(look_at=target)
+    cornea = ball[np.argsort((rig.vertices[ball] - pivot) @ front)[-20:]]
+    a0 = (rig.vertices[cornea].mean(axis=0) - pivot)
+    a1 = (V[cornea].mean(axis=0) - pivot)
+    assert a1 @ left > a0 @ left + 0.2 * np.linalg.norm(a0)
+    assert np.allclose(np.linalg.norm(V[ball] - pivot, axis=1), np.linalg.norm(rig.vertices[ball] - pivot, axis=1))
+    # a gaze of (yaw, pitch) turns the eye by that angle, and the skin does not move
+    V = m.pose(gaze=(20.0, 0.0))
+    b0 = rig.frame.to_canonical(rig.vertices[cornea]).mean(axis=0) - m.pivots_[eye]
+    b1 = rig.frame.to_canonical(V[cornea]).mean(axis=0) - m.pivots_[eye]
+    turn = np.degrees(np.arctan2(b1[0], b1[2]) - np.arctan2(b0[0], b0[2]))
+    assert abs(turn - 20.0) < 0.5, turn
+    assert not (V[m.skin_] - rig.vertices[m.skin_]).any()
+
+
+# flips at intensity 1 that the model still makes: jaw opening (AU26/27) folds skin near the
+# jaw angle and the mouth corners under linear blend skinning; see the report in README
+KNOWN_FLIPS = set()
+
+
+@pytest.mark.parametrize("name", ["default", "ict"])
+@pytest.mark.parametrize("what", [f"au{a}" for a in AUS] + EMOTIONS)
+def test_no_flipped_triangles_and_no_nan_at_intensity_1(model, name, what):
+    if (name, what) in KNOWN_FLIPS:
+        pytest.xfail("known fold")
+    rig, m = model(name)
+    V = m.pose(au={what[2:]: 1.0}) if what.startswith("au") else m.pose(expression=what)
+    assert np.isfinite(V).all()
+    skin = m.skin_[rig.faces].all(axis=1)
+    flips = flipped_faces(rig.vertices, V, rig.faces) & skin
+    assert flips.sum() == 0, f"{flips.sum()} flipped skin triangles"
+    assert np.linalg.norm(V - rig.vertices, axis=1).max() > 0.005 * m.face_unit_ * rig.frame.size
+
+
+def test_deterministic_linear_and_fast(model):
+    rig, m = model("ict")
+    m2 = ExpressionModel().fit(rig)
+    a = m.pose(expression="happiness", jaw_deg=5, gaze=(5, 3))
+    assert np.array_equal(a, m2.pose(expression="happiness", jaw_deg=5, gaze=(5, 3)))
+    # the muscle stage is linear in the contractions (before the skull clamp)
+    p = m.parameters(au={12: 0.5, 4: 0.3})
+    assert p["contractions"].shape == (len(m.muscle_names_),)
+    G = np.tensordot(p["contractions"], m.muscle_basis_, axes=1)
+    assert np.allclose(G, 0.5 * np.tensordot(m.parameters(au={12: 1})["contractions"], m.muscle_basis_, 1)
+                       + 0.3 * np.tensordot(m.parameters(au={4: 1})["contractions"], m.muscle_basis_, 1))
+    assert np.array_equal(m.pose_parameters(p["contractions"], p["jaw_deg"], p["eyelids"]), m.pose(au={12: 0.5, 4: 0.3}))
+    t = time.perf_counter()
+    for _ in range(5):
+        m.pose(expression="surprise", gaze=(5, 0), head_deg=(5, 10, 0))
+    per = (time.perf_counter() - t) / 5
+    assert len(rig.vertices) > 26000 and per < 0.25, per
+
+
+def test_muscle_parameters_and_errors(model):
+    rig, m = model("default")
+    a = m.pose(muscles={"zygomaticus_major": 1.0})
+    b = m.pose(au={12: 1.0})
+    assert np.array_equal(a, b)
+    one = m.pose(muscles={"zygomaticus_major_l": 1.0})
+    assert np.array_equal(one, m.pose(au={"12L": 1}))
+    for bad in ({"au": {99: 1}}, {"au": {"12X": 1}}, {"muscles": {"orbicularis": 1}}, {"expression": "joy"},
+                {"au": {12: float("nan")}}, {"eyelids": {"middle": 1}}):
+        with pytest.raises(AutobonesError):
+            m.pose(**bad)
+    with pytest.raises(AutobonesError):
+        m.pose_parameters(np.zeros(3))
+    with pytest.raises(AutobonesError):
+        ExpressionModel().pose()
+
+
+def test_the_data_file_defines_the_seed_aus_and_emotions():
+    need = {"1", "2", "4", "5", "6", "9", "10", "12", "14", "15", "17", "20", "25", "26", "43"}
+    assert need <= set(DOC["action_units"])
+    assert set(EMOTIONS) == {"surprise", "fear", "happiness", "sadness", "disgust", "anger"}
+    for e in DOC["expressions"].values():
+        assert set(e["au"]) <= set(DOC["action_units"])
+    types = set(DOC["muscle_types"])
+    for au in DOC["action_units"].values():
+        assert set(au.get("muscles", {})) <= types
