@@ -234,9 +234,12 @@ class ExpressionModel:
         # splits by the same line, over its whole depth and height
         centre = self.pivots_[names.index("head")] if "head" in names else Vc.mean(axis=0)
         inward = (N * (Vc - centre)).sum(axis=1) < 0
-        lining = (inward & skin & (dx < 1.5 * hw) & (np.abs(s_mouth) < 4.0 * zh) & (Vc[:, 2] > z_ch - 1.0 * fu))
-        zone = np.where(lining, _ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw), zone)
+        lining = inward & skin
+        lining_zone = (_ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * _ramp(np.abs(s_mouth), 4.0 * zh, 3.0 * zh)
+                       * _ramp(Vc[:, 2], z_ch - 1.2 * fu, z_ch - 0.8 * fu))
+        zone = np.where(lining, np.maximum(zone, lining_zone), zone)
         cut = float(lips["cut_width"]) * fu
+        cut = cut * (1.0 + 4.0 * np.clip(dx / hw, 0.0, 1.2) ** 4)   # softer toward the corners
         upper = _ramp(s_mouth, -0.5 * cut, 0.5 * cut)
         self.mouth_ = {"zone": zone, "upper": upper, "signed": s_mouth, "stomion": st}
 
@@ -266,7 +269,7 @@ class ExpressionModel:
             # which lip the wire belongs to: its insertion inside the mouth zone's width
             ins_dx = abs(ip[0] - st[0])
             ins_s = ip[1] - np.interp(ip[0], xs[order], np.array([ch_r[1], st[1], ch_l[1]])[order])
-            if ins_dx < 0.9 * hw and abs(ins_s) > cut:
+            if ins_dx < 0.9 * hw and abs(ins_s) > float(lips["cut_width"]) * fu:
                 gate = 1.0 - zone * ((1.0 - upper) if ins_s > 0 else upper)
                 side = "upper" if ins_s > 0 else "lower"
             else:
@@ -291,23 +294,37 @@ class ExpressionModel:
                 G[j2] += Wm @ d
             total += np.asarray(Wm.sum(axis=1)).ravel()
             self.wires_.append({"muscle": nm, "base": Q, "vertices": cv_idx, "dropoff": d0, "side": side})
-        # a few smoothing passes over the skin graph, never across the mouth line, so the wires'
-        # dropoffs do not fold the small triangles of the mouth corners
-        passes = int(model.get("smoothing_passes", 8))
-        if passes:
-            import scipy.sparse as sp
+        # smooth the muscle fields by heat diffusion over ~1 mm of skin (implicit step with the
+        # intrinsic Laplacian, edges across the mouth line removed): a wire's dropoff varies faster
+        # than the tiny triangles of mouth and eye corners can follow without folding
+        from .build_rig import _laplacian
 
-            E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-            keep = skin[E[:, 0]] & skin[E[:, 1]]
-            across = (np.maximum(zone[E[:, 0]], zone[E[:, 1]]) > 0.1) & (np.abs(upper[E[:, 0]] - upper[E[:, 1]]) > 0.5)
-            E = E[keep & ~across]
-            A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
-            deg = np.asarray(A.sum(axis=1)).ravel()
-            Sm = sp.diags(np.where(deg > 0, 0.5 / np.maximum(deg, 1), 0.0)) @ A + sp.diags(np.where(deg > 0, 0.5, 1.0))
-            flat = G.transpose(1, 0, 2).reshape(n, -1)
-            for _ in range(passes):
-                flat = Sm @ flat
-            G = np.ascontiguousarray(flat.reshape(n, k, 3).transpose(1, 0, 2))
+        Lp, M = _laplacian(Vc, F)
+        self._laplacian = (Lp, M)
+        t_s = (float(model.get("smoothing", 0.012)) * fu) ** 2
+        if t_s > 0:
+            import scipy.sparse as sp
+            from scipy.sparse.linalg import splu
+
+            C = Lp.tocoo()
+            off = C.row != C.col
+            # an edge across the mouth line conducts less the more it lies in the mouth zone
+            conduct = (1.0 - np.minimum(zone[C.row], zone[C.col]) * np.abs(upper[C.row] - upper[C.col])) \
+                * (skin[C.row] & skin[C.col])
+            keep = off & (conduct > 0)
+            Loff = sp.csr_matrix((C.data[keep] * conduct[keep], (C.row[keep], C.col[keep])), shape=(n, n))
+            Lc = Loff - sp.diags(np.asarray(Loff.sum(axis=1)).ravel())
+            # muscles whose wire pulls one lip are smoothed with the cut, the corner muscles (wires
+            # on both lips) without it
+            sides = {w["muscle"]: w["side"] for w in self.wires_}
+            both = np.array([sides.get(nm, "both") == "both" for nm in mj.names])
+            for sel, lap_ in ((~both, Lc), (both, Lp)):
+                if not sel.any():
+                    continue
+                lu = splu((M + t_s * lap_).tocsc())
+                flat = G[sel].transpose(1, 0, 2).reshape(n, -1)
+                flat = lu.solve(np.asarray(M @ flat))
+                G[sel] = flat.reshape(n, int(sel.sum()), 3).transpose(1, 0, 2)
         if bool(model.get("normalise_overlaps", False)):
             G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
         self.muscle_basis_ = G
@@ -350,6 +367,16 @@ class ExpressionModel:
         self.lid_weights_ = np.zeros((4, n))
         self.lid_close_deg_ = np.zeros(2)
         self.lid_pivots_ = np.zeros((2, 3))
+        # open lids: the fissure's midpoint lies in a hole of the skin, far from its surface
+        import igl
+
+        skinF = F[skin[F].all(axis=1)]
+        mids = []
+        for s in "lr":
+            nm_ = [f"palpebrale_superius_{s}", f"palpebrale_inferius_{s}"]
+            mids.append(0.5 * (L[nm_[0]] + L[nm_[1]]) if all(x in L for x in nm_) else Vc.mean(axis=0))
+        mid_gap = np.sqrt(igl.point_mesh_squared_distance(np.array(mids), np.ascontiguousarray(Vc),
+                                                          np.ascontiguousarray(skinF))[0]) if len(skinF) else np.zeros(2)
         for e, s in enumerate("lr"):
             c = eyes.get(s)
             if c is None:
@@ -372,7 +399,7 @@ class ExpressionModel:
             front = _ramp(Vc[:, 2], c[2] - 0.02 * fu, c[2] + 0.04 * fu)
             ru = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["upper_height"]) * fu)) ** 2)
             rl = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["lower_height"]) * fu)) ** 2)
-            is_open = tree.query(mid)[0] > 0.25 * gap
+            is_open = mid_gap[e] > 0.25 * gap
             if is_open:
                 up_step, low_step = _ramp(s_f, 0.0, 0.15 * gap), _ramp(-s_f, 0.0, 0.15 * gap)
             else:  # closed lids (one surface across the fissure): spread so nothing folds over
@@ -386,6 +413,11 @@ class ExpressionModel:
             self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
             self.lid_pivots_[e] = c
         self.lid_lower_range_ = float(lid["lower_range"])
+        if t_s > 0:  # the same ~1 mm smoothing as the muscle fields (eye corners have tiny triangles)
+            from scipy.sparse.linalg import splu
+
+            lu = splu((M + t_s * Lp).tocsc())
+            self.lid_weights_ = np.clip(lu.solve(np.asarray(M @ self.lid_weights_.T)).T, 0.0, 1.0) * skin
 
         # --- jaw weights sharpened across the mouth line -------------------------------------
         Wj = W.copy()
@@ -396,9 +428,16 @@ class ExpressionModel:
             from .build_rig import _diffuse, _laplacian
 
             spread = float(model.get("jaw_spread", 0.15)) * fu
-            jaw_s = np.clip(_diffuse(W[:, j], *_laplacian(Vc, F), t=spread ** 2), 0.0, 1.0) if spread > 0 else W[:, j]
+            jaw_s = np.clip(_diffuse(W[:, j], *self._laplacian, t=spread ** 2), 0.0, 1.0) if spread > 0 else W[:, j]
             below = _ramp(s_mouth, 0.0, -0.1 * fu) * skin
             jaw_b = (1.0 - below) * W[:, j] + below * jaw_s
+            # under the chin the opening jaw swings back toward the neck: the skin there follows it
+            # less and less from the menton back, so it stretches instead of folding into the neck
+            men = L.get("menton")
+            if men is not None:
+                under = _ramp(Vc[:, 1], men[1] + float(model.get("under_chin_height", 0.15)) * fu, men[1]) * skin
+                fade = _ramp(Vc[:, 2], men[2] - float(model.get("under_chin_depth", 0.6)) * fu, men[2])
+                jaw_b = jaw_b * (1.0 - under * (1.0 - fade))
             jaw_new = (1.0 - zone) * jaw_b + zone * (1.0 - upper)
             others = np.delete(np.arange(W.shape[1]), j)
             rest = W[:, others].sum(axis=1)
@@ -590,10 +629,23 @@ class ExpressionModel:
             d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
             d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
         # bones: neck -> head -> {jaw, eyes}, linear blend skinning with the sharpened jaw weights
-        R = self._bone_transforms(jaw_deg, gaze, look_at, head_deg, neck_deg)
+        # the jaw turns each vertex about its pivot by its weight times the angle (blending the
+        # angle, not the positions: linear blending would pull half-weighted skin under the chin
+        # toward the pivot, into the neck); then the head carries it
+        W = self.jaw_weights_
+        if jaw_deg:
+            if "jaw" not in self.bones_:
+                raise AutobonesError("jaw_deg: the rig has no 'jaw' bone")
+            j = self.bones_.index("jaw")
+            rows = np.flatnonzero(W[:, j] > 0)
+            ang = np.radians(float(jaw_deg)) * W[rows, j]
+            P = Vc[rows] + d[rows] - self.pivots_[j]
+            ca, sa = np.cos(ang), np.sin(ang)
+            d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
+            d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
+        R = self._bone_transforms(0.0, gaze, look_at, head_deg, neck_deg)
         if R:
             P = Vc + d
-            W = self.jaw_weights_
             for b, (Rb, tb) in R.items():
                 w = W[:, b]
                 rows = np.flatnonzero(w != 0)
@@ -656,10 +708,13 @@ class ExpressionModel:
         return moves
 
 
-def flipped_faces(V0, V1, F):
-    """Boolean (m,): triangles whose normal turned by more than 90 degrees from ``V0`` to ``V1``
-    (degenerate rest triangles never count)."""
+def flipped_faces(V0, V1, F, min_area=0.0):
+    """Boolean (m,): triangles whose normal turned by more than 90 degrees from ``V0`` to ``V1``.
+
+    ``V0``, ``V1`` (n, 3) rest and posed vertices, ``F`` (m, 3); triangles whose rest area is
+    not above ``min_area`` (units of V0 squared; degenerate ones at the default 0) never count.
+    """
     n0 = np.cross(V0[F[:, 1]] - V0[F[:, 0]], V0[F[:, 2]] - V0[F[:, 0]])
     n1 = np.cross(V1[F[:, 1]] - V1[F[:, 0]], V1[F[:, 2]] - V1[F[:, 0]])
-    ok = np.linalg.norm(n0, axis=1) > 0
+    ok = 0.5 * np.linalg.norm(n0, axis=1) > min_area
     return ok & ((n0 * n1).sum(axis=1) <= 0)
