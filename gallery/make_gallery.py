@@ -2,6 +2,7 @@
 
     python gallery/make_gallery.py            # all pictures into gallery/
     python gallery/make_gallery.py --only ict_neutral
+    python gallery/make_gallery.py --only landmarks     # the four landmark previews below
 
 Each picture is a rig made by ``autobones.place`` right now (no cached data),
 rendered by ``autobones.render`` from the front, three-quarter and side views in
@@ -9,6 +10,12 @@ the head's detected canonical frame: skin coloured by the skin weights (each
 bone a colour, blended by weight), bones drawn as segments with their heads as
 dots; a second row shows the face / middle / back depth groups and the facial
 mask (seed 003 fig. 1).
+
+``transfer_*``: the generic rig carried onto a landmarked head. ``landmarks_detected_*``:
+landmarks found by ``autobones.detect_landmarks`` on three human heads of different
+kinds (a scan, a sculpt, a statue), drawn by ``autobones.preview`` from the front and
+the side with each name's detection confidence; ``landmarks_given_goat``: the same
+preview of a landmark file placed by hand (no face detector works on a goat).
 """
 from __future__ import annotations
 
@@ -81,12 +88,52 @@ def transfer_picture(rig, size=420):
     return np.concatenate([top, bottom], axis=0)
 
 
+DETECTED = {  # name: mesh relative to ../shared/data; landmarks found automatically
+    "james": "menpo3d/james.obj",                       # a scan
+    "lee_perry_smith": "misc/LeePerrySmith.obj",        # a sculpt
+    "demosthenes": "misc/demosthenes-low-res.obj",      # a statue
+}
+GIVEN = {  # name: (mesh, landmark file relative to the project)
+    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
+}
+LANDMARK_PICTURES = [f"landmarks_detected_{k}" for k in DETECTED] + [f"landmarks_given_{k}" for k in GIVEN]
+
+
+def landmark_picture(name, out):
+    """Write ``landmarks_detected_<name>.png`` or ``landmarks_given_<name>.png`` into ``out``."""
+    from autobones.io.landmarks import read_landmarks
+    from autobones.io.mesh import load_mesh
+    from autobones.preview import save_preview
+
+    path = Path(out) / f"{name}.png"
+    if name.startswith("landmarks_detected_"):
+        mesh = DATA / DETECTED[name[len("landmarks_detected_"):]]
+        V, F = load_mesh(mesh)
+        lm = autobones.detect_landmarks((V, F))
+        save_preview(path, V, F, lm, frame=lm.frame, confidence=lm.confidence)
+        extra = (f"; dropped {', '.join(lm.dropped) or '-'}; flagged {', '.join(lm.flagged) or '-'}; "
+                 f"mean confidence {np.mean(list(lm.confidence.values())):.2f}")
+    else:
+        rel, marks = GIVEN[name[len("landmarks_given_"):]]
+        V, F = load_mesh(DATA / rel)
+        lm = read_landmarks(HERE.parent / marks)
+        save_preview(path, V, F, lm)
+        extra = f" from {marks}"
+    print(f"{path}: {len(lm)} landmarks{extra}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS])
+    ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
+                    + LANDMARK_PICTURES + ["landmarks"], help="'landmarks': the four landmark previews")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
-    for name in args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS]:
+    names = args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
+    names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else [n])]
+    for name in names:
+        if name.startswith("landmarks_"):
+            landmark_picture(name, args.out)
+            continue
         if name.startswith("transfer_"):
             mesh, marks = TRANSFERS[name[len("transfer_"):]]
             marks = HERE.parent / marks if marks.startswith("tests/") else DATA / marks
