@@ -340,7 +340,11 @@ class ExpressionModel:
             for r_i, r_name in enumerate(labels):
                 if r_name in skull:
                     thick[region == r_i] = float(skull[r_name]) * fu
-        self.thickness_ = thick
+        # the offset skull is smooth: region thicknesses blend over ~1 cm of skin
+        from scipy.sparse.linalg import splu as _splu
+
+        Lp_, M_ = self._laplacian
+        self.thickness_ = _splu((M_ + (float(skull.get("blend", 0.1)) * fu) ** 2 * Lp_).tocsc()).solve(M_ @ thick)
         # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
         # surfaces face each other) nor under skin whose normal points into the head
         self.clamp_ = (zone < 0.05) & ~inward
@@ -406,7 +410,7 @@ class ExpressionModel:
                 up_step, low_step = _ramp(s_f, -0.5 * gap, 1.5 * gap), _ramp(-s_f, -0.5 * gap, 1.5 * gap)
             # the fissure opens as 1 - u^2 between the corners, so the lid joints turn less there
             u = (Vc[:, 0] - cx) / (0.5 * abs(ex[0] - en[0]))
-            h = np.clip(1.0 - u * u, 0.0, 1.0) ** 2
+            h = np.clip(1.0 - u * u, 0.0, 1.0) ** float(lid.get("corner_exponent", 1.0))
             self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin * h
             self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin * h
             phi = lambda p: np.arctan2(p[1] - c[1], p[2] - c[2])  # noqa: E731
@@ -418,6 +422,12 @@ class ExpressionModel:
 
             lu = splu((M + t_s * Lp).tocsc())
             self.lid_weights_ = np.clip(lu.solve(np.asarray(M @ self.lid_weights_.T)).T, 0.0, 1.0) * skin
+        # the lid margins ride the eyeball: the muscles around (frontalis, zygomatics) stretch the
+        # lids' skin but leave the margins to the lid joints
+        hold = float(lid.get("margin_hold", 0.85)) * self.lid_weights_.max(axis=0)
+        self.muscle_basis_ *= (1.0 - hold)[None, :, None]
+        for i in list(self.crease_basis_):
+            self.crease_basis_[i] = self.crease_basis_[i] * (1.0 - hold)[:, None]
 
         # --- jaw weights sharpened across the mouth line -------------------------------------
         Wj = W.copy()
