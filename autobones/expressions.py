@@ -178,27 +178,47 @@ class ExpressionModel:
         self.face_unit_ = fu
         model = doc["model"]
 
-        # skin: the largest connected part, minus anything bound to an eye bone
+        # every graph operation runs on the mesh welded by position (unwelded heads, UV seams),
+        # per-vertex results are read back through ``index``
+        from .build_rig import _laplacian
         from .fit import mesh_parts
+        from .weights import weld
 
-        part = mesh_parts(n, F)
-        skin = part == np.bincount(part).argmax()
+        # (only when the mesh falls apart without it: welding would also join eyelashes, eye
+        # occlusion shells and teeth that touch the skin)
+        face_area = 0.5 * np.linalg.norm(np.cross(Vc[F[:, 1]] - Vc[F[:, 0]], Vc[F[:, 2]] - Vc[F[:, 0]]), axis=1)
+        part0 = mesh_parts(n, F)
+        if np.bincount(part0[F[:, 0]], weights=face_area, minlength=n).max() >= 0.2 * face_area.sum():
+            Vw, Fw, index = Vc, F, np.arange(n)
+        else:
+            Vw, Fw, index = weld(Vc, F, 1e-9 * max(float(np.ptp(Vc, axis=0).max()), 1e-300))
+        nw = len(Vw)
+        first = np.zeros(nw, dtype=np.int64)
+        first[index] = np.arange(n)
+        self._weld = (index, first)
+
+        # skin: the welded part with the largest area, minus anything bound to an eye bone
+        part_w = mesh_parts(nw, Fw)
+        area = 0.5 * np.linalg.norm(np.cross(Vw[Fw[:, 1]] - Vw[Fw[:, 0]], Vw[Fw[:, 2]] - Vw[Fw[:, 0]]), axis=1)
+        part = part_w[index]
+        skin = part == int(np.argmax(np.bincount(part_w[Fw[:, 0]], weights=area, minlength=nw)))
         for s in "lr":
             if f"eye_{s}" in names:
                 skin &= W[:, names.index(f"eye_{s}")] < 0.5
         self.skin_ = skin
-        N = vertex_normals(Vc, F)
+        Nw = vertex_normals(Vw, Fw)
+        N = Nw[index]
         self.normals_ = N
         # the offset skull is smooth: its directions are the skin normals smoothed over ~1 cm
-        Ns = N.copy()
         import scipy.sparse as sp
 
-        E0 = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-        A0 = sp.csr_matrix((np.ones(2 * len(E0)), (np.r_[E0[:, 0], E0[:, 1]], np.r_[E0[:, 1], E0[:, 0]])), shape=(n, n))
+        E0 = np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]])
+        A0 = sp.csr_matrix((np.ones(2 * len(E0)), (np.r_[E0[:, 0], E0[:, 1]], np.r_[E0[:, 1], E0[:, 0]])), shape=(nw, nw))
+        Ns = Nw.copy()
         for _ in range(int(model.get("skull_smoothing_passes", 10))):
             Ns = A0 @ Ns + Ns
         Ns /= np.maximum(np.linalg.norm(Ns, axis=1, keepdims=True), 1e-300)
-        self.skull_normals_ = Ns
+        self.skull_normals_ = Ns[index]
         skin_idx = np.flatnonzero(skin)
         tree = cKDTree(Vc[skin_idx])
 
@@ -297,9 +317,7 @@ class ExpressionModel:
         # smooth the muscle fields by heat diffusion over ~1 mm of skin (implicit step with the
         # intrinsic Laplacian, edges across the mouth line removed): a wire's dropoff varies faster
         # than the tiny triangles of mouth and eye corners can follow without folding
-        from .build_rig import _laplacian
-
-        Lp, M = _laplacian(Vc, F)
+        Lp, M = _laplacian(Vw, Fw)
         self._laplacian = (Lp, M)
         t_s = (float(model.get("smoothing", 0.012)) * fu) ** 2
         if t_s > 0:
@@ -309,10 +327,10 @@ class ExpressionModel:
             C = Lp.tocoo()
             off = C.row != C.col
             # an edge across the mouth line conducts less the more it lies in the mouth zone
-            conduct = (1.0 - np.minimum(zone[C.row], zone[C.col]) * np.abs(upper[C.row] - upper[C.col])) \
-                * (skin[C.row] & skin[C.col])
+            zw, uw, sw = zone[first], upper[first], skin[first]
+            conduct = (1.0 - np.minimum(zw[C.row], zw[C.col]) * np.abs(uw[C.row] - uw[C.col])) * (sw[C.row] & sw[C.col])
             keep = off & (conduct > 0)
-            Loff = sp.csr_matrix((C.data[keep] * conduct[keep], (C.row[keep], C.col[keep])), shape=(n, n))
+            Loff = sp.csr_matrix((C.data[keep] * conduct[keep], (C.row[keep], C.col[keep])), shape=(nw, nw))
             Lc = Loff - sp.diags(np.asarray(Loff.sum(axis=1)).ravel())
             # muscles whose wire pulls one lip are smoothed with the cut, the corner muscles (wires
             # on both lips) without it
@@ -322,8 +340,8 @@ class ExpressionModel:
                 if not sel.any():
                     continue
                 lu = splu((M + t_s * lap_).tocsc())
-                flat = G[sel].transpose(1, 0, 2).reshape(n, -1)
-                flat = lu.solve(np.asarray(M @ flat))
+                flat = G[sel][:, first].transpose(1, 0, 2).reshape(nw, -1)
+                flat = lu.solve(np.asarray(M @ flat))[index]
                 G[sel] = flat.reshape(n, int(sel.sum()), 3).transpose(1, 0, 2)
         if bool(model.get("normalise_overlaps", False)):
             G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
@@ -344,7 +362,8 @@ class ExpressionModel:
         from scipy.sparse.linalg import splu as _splu
 
         Lp_, M_ = self._laplacian
-        self.thickness_ = _splu((M_ + (float(skull.get("blend", 0.1)) * fu) ** 2 * Lp_).tocsc()).solve(M_ @ thick)
+        self.thickness_ = _splu((M_ + (float(skull.get("blend", 0.1)) * fu) ** 2 * Lp_).tocsc()).solve(
+            M_ @ thick[first])[index]
         # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
         # surfaces face each other) nor under skin whose normal points into the head
         self.clamp_ = (zone < 0.05) & ~inward
@@ -421,7 +440,8 @@ class ExpressionModel:
             from scipy.sparse.linalg import splu
 
             lu = splu((M + t_s * Lp).tocsc())
-            self.lid_weights_ = np.clip(lu.solve(np.asarray(M @ self.lid_weights_.T)).T, 0.0, 1.0) * skin
+            lw = lu.solve(np.asarray(M @ self.lid_weights_[:, first].T))[index].T
+            self.lid_weights_ = np.clip(lw, 0.0, 1.0) * skin
         # the lid margins ride the eyeball: the muscles around (frontalis, zygomatics) stretch the
         # lids' skin but leave the margins to the lid joints
         hold = float(lid.get("margin_hold", 0.85)) * self.lid_weights_.max(axis=0)
@@ -438,7 +458,8 @@ class ExpressionModel:
             from .build_rig import _diffuse, _laplacian
 
             spread = float(model.get("jaw_spread", 0.15)) * fu
-            jaw_s = np.clip(_diffuse(W[:, j], *self._laplacian, t=spread ** 2), 0.0, 1.0) if spread > 0 else W[:, j]
+            jaw_s = (np.clip(_diffuse(W[first, j], *self._laplacian, t=spread ** 2), 0.0, 1.0)[index]
+                     if spread > 0 else W[:, j])
             below = _ramp(s_mouth, 0.0, -0.1 * fu) * skin
             jaw_b = (1.0 - below) * W[:, j] + below * jaw_s
             # under the chin the opening jaw swings back toward the neck: the skin there follows it
