@@ -40,8 +40,8 @@ from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
 from .io.landmarks import NAMES, mirror_name
-from .orient import detect_frame
-from .render import Camera, look_at, orthographic_camera, rasterize, shade, surface_points
+from .orient import Frame, detect_frame
+from .render import Camera, look_at, orthographic_camera, rasterize, shade, surface_points, vertex_normals
 
 #: MediaPipe Face Mesh point indices -> contract name (the mean of the listed points).
 #: Indices from MediaPipe's canonical face model (``mesh_map.jpg``); the subject's
@@ -74,6 +74,15 @@ DEFAULT_VIEWS = ((0.0, 0.0), (30.0, 0.0), (-30.0, 0.0), (0.0, 15.0), (0.0, -15.0
 #: is the most anterior and the menton the lowest midline point (measured on the published
 #: ICT and menpo3d landmarks: 15 degrees on both sources).
 PROFILE_TILT = 15.0
+
+#: Field of view of the face pictures, in face widths (the face detector wants some
+#: background around the face, which a face-only scan does not have).
+FACE_FIELD = 1.5
+
+FACING_POWER = 2
+
+#: Picture size for finding the face on the whole head (the face detector works at 128 px).
+SEARCH_SIZE = 256
 
 #: Key light in camera coordinates: above the camera, like a studio portrait. Measured
 #: against a head-on light: brows 6.6 vs 7.8%, mean 3.8 vs 4.3% of ex-ex over five views.
@@ -138,7 +147,8 @@ def _quiet_stderr():
 
 
 class MediaPipeFaceMesh:
-    """MediaPipe Face Mesh as a function of an image: (H, W, 3) uint8 -> (468, 2) pixels or None.
+    """MediaPipe Face Mesh as a function of an image: (H, W, 3) uint8 -> (468, 3) or None:
+    pixel x (column), y (row), and depth in pixels (relative, growing away from the viewer).
 
     ``points`` maps the contract's names to its point indices (:data:`MEDIAPIPE_POINTS`).
 
@@ -150,7 +160,7 @@ class MediaPipeFaceMesh:
 
     points = MEDIAPIPE_POINTS
 
-    def __init__(self, min_confidence=0.3):
+    def __init__(self, min_confidence=0.5):
         self.min_confidence = min_confidence
         self._model = None
 
@@ -182,7 +192,8 @@ class MediaPipeFaceMesh:
         lm = result.multi_face_landmarks[0].landmark
         # MediaPipe's coordinates are fractions of the image with 0 at the image edge;
         # pixel centres here are at integers
-        return np.array([[p.x * W - 0.5, p.y * H - 0.5] for p in lm], dtype=np.float64)
+        # depth: MediaPipe's z, on the scale of x, growing away from the viewer
+        return np.array([[p.x * W - 0.5, p.y * H - 0.5, p.z * W] for p in lm], dtype=np.float64)
 
     def close(self):
         if self._model is not None:
@@ -192,6 +203,112 @@ class MediaPipeFaceMesh:
 
 # ---------------------------------------------------------------------------
 # views and lifting
+
+
+#: Midline names from top to bottom: a face's landmarks come in this order along its up.
+TOP_DOWN = ("nasion", "pronasale", "subnasale", "labiale_superius", "stomion", "labiale_inferius", "menton")
+
+
+def nose_forward(P, table):
+    """Whether the nose tip is nearer the viewer (+z) than the outer eye corners, given the
+    table's points lifted to the surface ((p, 3), picture frame). False for the inside of a
+    face-only shell seen from behind, which a face detector takes for a face (the hollow-face
+    illusion)."""
+    if not all(n in table for n in ("pronasale", "exocanthion_l", "exocanthion_r")):
+        return True
+    tip = P[table["pronasale"][0], 2]
+    eyes = P[[table["exocanthion_l"][0], table["exocanthion_r"][0]], 2]
+    return bool(np.isfinite(tip) and np.all(np.isfinite(eyes)) and tip > eyes.mean())
+
+
+def plausible(landmarks):
+    """Whether detected landmarks look like a face in their frame: midline names in top-down
+    order, eyes above the mouth, the nose tip in front of the eyes, every ``_l`` on the
+    subject's left of its ``_r``. Guards against a face the detector imagines in a head
+    pictured upside down or from behind."""
+    Q = {n: landmarks.frame.to_canonical(np.asarray(p)[None])[0] for n, p in landmarks.items()}
+    eyes = [Q[n][2] for n in ("exocanthion_l", "exocanthion_r") if n in Q]
+    if "pronasale" in Q and eyes and Q["pronasale"][2] <= np.mean(eyes):
+        return False
+    ys = [Q[n][1] for n in TOP_DOWN if n in Q]
+    if any(a < b for a, b in zip(ys, ys[1:])):
+        return False
+    for eye, mouth in (("exocanthion_l", "cheilion_l"), ("exocanthion_r", "cheilion_r")):
+        if eye in Q and mouth in Q and Q[eye][1] <= Q[mouth][1]:
+            return False
+    return all(Q[n][0] > Q[mirror_name(n)][0] for n in Q if n.endswith("_l") and mirror_name(n) in Q)
+
+
+def face_axes(points, table):
+    """The subject's left and up as unit (3,) vectors in the picture's frame (x right, y up,
+    z toward the viewer), from a detector's points with depth ((p, 3): pixels, depth in pixels
+    growing away from the viewer); (None, None) without depth. Left: mean direction right ->
+    left over the table's bilateral pairs; up: menton -> nasion."""
+    if points.shape[1] < 3 or "menton" not in table or "nasion" not in table:
+        return None, None
+    P = points * np.array([1.0, -1.0, -1.0])
+    u = [P[table[n][0]] - P[table[mirror_name(n)][0]] for n in table
+         if n.endswith("_l") and mirror_name(n) in table]
+    if not u:
+        return None, None
+    u = np.array(u)
+    left = (u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-12)).mean(axis=0)
+    up = P[table["nasion"][0]] - P[table["menton"][0]]
+    if np.linalg.norm(left) == 0 or np.linalg.norm(up) == 0:
+        return None, None
+    return left / np.linalg.norm(left), up / np.linalg.norm(up)
+
+
+def squared_frame(frame, landmarks):
+    """``frame`` turned so that its left axis is the normal of the landmarks' own mirror plane
+    (yaw and roll corrected, pitch kept)."""
+    names = list(landmarks)
+    Q = frame.to_canonical(np.array([landmarks[n] for n in names]))
+    normal, _ = symmetry_plane(dict(zip(names, Q)))
+    up = np.array([0.0, 1.0, 0.0]) - normal[1] * normal
+    up /= np.linalg.norm(up)
+    M = np.vstack([normal, up, np.cross(normal, up)])
+    return Frame(rotation=M @ frame.rotation, origin=frame.origin, size=frame.size,
+                 symmetry_error=frame.symmetry_error)
+
+
+def turn_degrees(A, B):
+    """Angle in degrees of the rotation taking the (3, 3) rotation ``B`` to ``A``."""
+    return float(np.degrees(np.arccos(np.clip((np.trace(A @ B.T) - 1.0) / 2.0, -1.0, 1.0))))
+
+
+def turns(search=True):
+    """Candidate rotations of the canonical frame: None (keep it) first, then with ``search``
+    the (3, 3) rotations that bring each axis direction to the front and another to the top
+    (the identity among them)."""
+    yield None
+    if not search:
+        return
+    axes = [np.array(a, dtype=np.float64) for a in
+            ((0, 0, 1), (0, 0, -1), (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0))]
+    for front in axes:
+        for up in axes:
+            if abs(front @ up) > 0.5:
+                continue
+            yield np.vstack([np.cross(up, front), up, front])
+
+
+def skin_faces(V, F):
+    """(m,) bool: the triangles of the skin, the connected part with the largest area (after
+    welding coincident vertices), when it holds at least half the area; else every triangle.
+
+    Scanned or modelled heads often carry eyeballs, eyelashes, teeth in separate parts; a
+    landmark lifted from an oblique picture must land on the skin, not on an eyelash."""
+    from .fit import mesh_parts
+    from .weights import weld
+
+    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    _, Fw, index = weld(V, F, 1e-9 * max(float(np.ptp(V, axis=0).max()), 1e-300))
+    part = mesh_parts(int(index.max()) + 1, index[F])[index[F[:, 0]]]
+    totals = np.bincount(part, weights=area)
+    if totals.max() < 0.5 * totals.sum():
+        return np.ones(len(F), dtype=bool)
+    return part == int(np.argmax(totals))
 
 
 def view_direction(yaw, pitch):
@@ -302,9 +419,17 @@ class LandmarkDetector:
         is flagged.
     refine : bool
         Apply the geometric refinement (symmetry, pronasale, menton).
+    search : bool
+        When the detected frame's front shows no face, look from the other axis
+        directions (and with other ups) before giving up; the face found sets the frame.
+    max_turn : float
+        Degrees: when the mirror plane of the first landmarks is turned further than this
+        from the frame the pictures were taken in (a head turned in its file, a face-only
+        scan), the face is pictured and detected again square to it.
     detector : callable or None
-        Image -> (p, 2) pixels or None, with a ``points`` attribute mapping contract names
-        to its point indices; None is :class:`MediaPipeFaceMesh`.
+        Image -> (p, 2) pixels (or (p, 3) with relative depth, which lets a turned face be
+        squared before the pictures) or None, with a ``points`` attribute mapping contract
+        names to its point indices; None is :class:`MediaPipeFaceMesh`.
     """
 
     views: tuple = DEFAULT_VIEWS
@@ -312,6 +437,8 @@ class LandmarkDetector:
     max_disagreement: float = 0.08
     max_mirror_error: float = 0.06
     refine: bool = True
+    search: bool = True
+    max_turn: float = 10.0
     detector: object = None
 
     def detect(self, V, F, frame=None, what="the head"):
@@ -325,48 +452,107 @@ class LandmarkDetector:
         # MediaPipe's graph threads log to file descriptor 2 while they work
         quiet = _quiet_stderr() if isinstance(detector, MediaPipeFaceMesh) else contextlib.nullcontext()
         with quiet:
-            return self._detect(V, F, frame, detector, what)
+            found = self._detect(V, F, frame, detector, what, search=self.search)
+            # a face turned away from the frame's front (a head turned in its file, a face-only
+            # scan): look again, square to the face the landmarks describe
+            for _ in range(3):          # a face first found from far off its front converges
+                again = squared_frame(found.frame, found)
+                if turn_degrees(again.rotation, found.frame.rotation) <= self.max_turn:
+                    break
+                try:
+                    found = self._detect(V, F, again, detector, what, search=False)
+                except AutobonesError:
+                    break               # keep what the first pictures gave
+        if not plausible(found):
+            raise AutobonesError(NO_FACE.format(what=what))
+        return found
 
-    def _detect(self, V, F, frame, detector, what):
+    def _find_face(self, Vc, F, detector, what, search):
+        """Find the face on whole-head pictures: from the front of the canonical frame, else (a
+        face-only scan, a frame guessed wrong) from the other axis directions. When the detector
+        reports depth (MediaPipe does) and the face is turned from the picture, the frame is
+        turned to face it (yaw and roll) and pictured again.
+
+        Returns (M, P0): the (3, 3) rotation to apply to the canonical frame, and the face's
+        points lifted to the surface in the turned frame ((p, 3), NaN where off the surface).
+        """
+        table = getattr(detector, "points", MEDIAPIPE_POINTS)
+
+        def look(Vt, size, margin):
+            cam = orthographic_camera(Vt, (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), size=(size, size), margin=margin)
+            buf = rasterize(Vt, F, cam)          # camera axes = the frame's axes
+            found = detector(shade(Vt, F, buf, light_dir=(0.0, 0.0, 1.0), ambient=0.15))
+            if found is None:
+                return None, None
+            P0 = lift(surface_points(Vt, F, buf), found[:, :2])
+            return found, (P0 if np.isfinite(P0[:, 0]).sum() >= 0.5 * len(P0) else None)
+
+        for M in turns(search):
+            first = M is None
+            M = np.eye(3) if first else M
+            # the search is coarser, with a wide margin: the face detector wants some
+            # background around a face-only scan
+            size, margin = (self.size, 0.05) if first else (SEARCH_SIZE, 0.25)
+            found, P0 = look(Vc @ M.T, size, margin)
+            if P0 is None or not nose_forward(P0, table):
+                continue
+            left, face_up = face_axes(found, table)
+            if left is not None and np.degrees(np.arccos(np.clip(left[0], -1, 1))) > self.max_turn:
+                # keep the picture's up (and so the frame's pitch) unless the face is upside
+                # down or on its side in the picture
+                up = np.array([0.0, 1.0, 0.0]) if face_up[1] > 0.5 else face_up
+                up = up - (up @ left) * left
+                up /= np.linalg.norm(up)
+                Q = np.vstack([left, up, np.cross(left, up)])
+                found2, P2 = look(Vc @ (Q @ M).T, self.size, 0.05 if first else margin)
+                if P2 is not None and nose_forward(P2, table):
+                    M, P0 = Q @ M, P2
+            return M, P0
+        raise AutobonesError(NO_FACE.format(what=what))
+
+    def _detect(self, V, F, frame, detector, what, search):
         Vc = frame.to_canonical(V)
 
-        # 1. find the face on a whole-head front picture
-        whole = orthographic_camera(Vc, (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), size=(self.size, self.size))
-        buf = rasterize(Vc, F, whole)
-        found = detector(shade(Vc, F, buf, light_dir=(0.0, 0.0, 1.0), ambient=0.15))
-        if found is None:
-            raise AutobonesError(NO_FACE.format(what=what))
-        P0 = lift(surface_points(Vc, F, buf), found)
+        # 1. find the face on a whole-head picture and turn the frame to face it
+        M, P0 = self._find_face(Vc, F, detector, what, search)
+        if not np.array_equal(M, np.eye(3)):
+            frame = Frame(rotation=M @ frame.rotation, origin=frame.origin, size=frame.size,
+                          symmetry_error=frame.symmetry_error)
+            Vc = Vc @ M.T
         ok = np.all(np.isfinite(P0), axis=1)
-        if ok.sum() < 0.5 * len(P0):
-            raise AutobonesError(NO_FACE.format(what=what))
         lo, hi = np.percentile(P0[ok], 0, axis=0), np.percentile(P0[ok], 100, axis=0)
         target = (lo + hi) / 2.0
-        width = 1.5 * float(max(hi[0] - lo[0], hi[1] - lo[1]))
+        width = FACE_FIELD * float(max(hi[0] - lo[0], hi[1] - lo[1]))
 
         # 2. every view: picture, 2-D points, lift
         cands, weights, view_info = [], [], []
-        N = None
+        skin = skin_faces(Vc, F)
+        Fs = F if skin.all() else F[skin]
+        N = vertex_normals(Vc, F)
+        tree = cKDTree(Vc)
         for yaw, pitch in self.views:
             d = view_direction(yaw, pitch)
             cam = face_camera(target, d, width, self.size)
             buf = rasterize(Vc, F, cam)
             light = cam.view[:3, :3].T @ (np.array(KEY_LIGHT) / np.linalg.norm(KEY_LIGHT))
             px = detector(shade(Vc, F, buf, light_dir=light, ambient=0.15))
+            px = None if px is None else px[:, :2]
             view_info.append({"yaw": float(yaw), "pitch": float(pitch), "face": px is not None})
             if px is None:
                 continue
             P = lift(surface_points(Vc, F, buf), px)
-            if N is None:
-                from .render import vertex_normals
-                N = vertex_normals(Vc, F)
-                # outward normals whichever way the file winds its triangles
-                N *= 1.0 if ((Vc - Vc.mean(axis=0)) * N).sum() >= 0 else -1.0
-            # how squarely the view sees each point: grazing views lift badly
-            _, near = cKDTree(Vc).query(np.nan_to_num(P))
+            if not cands:
+                # outward normals whichever way the file winds its triangles: the face seen
+                # from the first view faces that view (a centroid test fails on a face-only shell)
+                shown = F[buf.face_id[buf.mask]]
+                N *= 1.0 if (N[shown].sum(axis=(0, 1)) @ d) >= 0 else -1.0
+            # how squarely the view sees the surface where each point lands: grazing views lift
+            # badly, and a point that lands on a surface facing away (the far side of an
+            # eyeball, an eyelash) is no sight of the skin at all
+            _, near = tree.query(np.nan_to_num(P))
             facing = np.clip(N[near] @ d, 0.0, 1.0)
             cands.append(P)
-            weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** 2, 0.0))
+            weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** FACING_POWER, 0.0))
         if not cands:
             raise AutobonesError(NO_FACE.format(what=what))
         X, w = np.array(cands), np.array(weights)
@@ -383,9 +569,10 @@ class LandmarkDetector:
         dev = np.linalg.norm(Xn - comb[None], axis=2) / unit_c          # (v, k)
         dev = np.where(wn > 0, dev, np.nan)
         spread = np.nanmedian(dev, axis=0) if len(cands) > 1 else np.zeros(len(names))
-        return self._finish(V, F, Vc, frame, names, comb, spread, unit_c, view_info)
+        return self._finish(V, Fs, Vc, frame, names, comb, spread, unit_c, view_info)
 
     def _finish(self, V, F, Vc, frame, names, comb, spread, unit_c, view_info):
+        """Drop, refine and snap onto the triangles ``F`` (the skin)."""
         from .stick import closest_points
 
         points = {n: comb[i] for i, n in enumerate(names) if np.all(np.isfinite(comb[i]))}

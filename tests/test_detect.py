@@ -168,8 +168,54 @@ def test_no_face_on_animals_and_cartoons(mesh):
 
 def test_back_of_the_head_has_no_face():
     V, F = default_head()
+    back = F[(V[F][:, :, 2] < -0.02).all(axis=1)]           # the half behind the ears
     with pytest.raises(AutobonesError, match="no face found"):
-        autobones.detect_landmarks((V, F), front="-z")       # told the back is the front
+        autobones.detect_landmarks((V, back))
+
+
+def test_face_turned_in_its_file_is_found_and_squared(ict):
+    """A head turned 40 degrees about its vertical (the frame finder only tries the file's axes)
+    and a face told to look the wrong way: the search and the detector's own head pose find
+    the face, and the landmarks are as good as on the upright head."""
+    V, F, truth, found = ict
+    a = np.radians(40.0)
+    R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    turned = LandmarkDetector().detect(V @ R.T, F)
+    err = errors({n: p @ R for n, p in turned.items()}, truth)
+    assert len(err) >= 25 and np.mean(list(err.values())) < 4.0, err
+    back = autobones.detect_landmarks((V, F), front="-z")    # told the back of the head is the front
+    assert np.mean(list(errors(back, truth).values())) < 4.0
+
+
+def test_face_only_scan_is_never_read_from_the_inside():
+    """A partial face scan seen from behind is a hollow mask that a face detector takes for a
+    face (the hollow-face illusion). MediaPipe finds only that view of this low-resolution scan,
+    so the right answer here is 'no face found' -- never mirrored landmarks."""
+    V, F = load_mesh(data("misc/fran_cut.obj"))
+    try:
+        found = LandmarkDetector().detect(V, F)
+    except AutobonesError as exc:
+        assert "no face found" in str(exc)
+        return
+    Q = {n: found.frame.to_canonical(p[None])[0] for n, p in found.items()}
+    assert Q["pronasale"][2] > max(Q["exocanthion_l"][2], Q["exocanthion_r"][2])
+
+
+def test_implausible_landmarks_are_refused():
+    from autobones.detect import plausible
+    from autobones.orient import Frame
+
+    frame = Frame(rotation=np.eye(3), origin=np.zeros(3), size=1.0)
+    face = {"nasion": [0, 0.5, 0.1], "pronasale": [0, 0.3, 0.2], "stomion": [0, 0.1, 0.1], "menton": [0, -0.1, 0.05],
+            "exocanthion_l": [0.3, 0.5, 0], "exocanthion_r": [-0.3, 0.5, 0],
+            "cheilion_l": [0.15, 0.1, 0.05], "cheilion_r": [-0.15, 0.1, 0.05]}
+    make = lambda d: DetectedLandmarks({k: np.array(v, float) for k, v in d.items()}, {}, {}, {}, [], frame, 1.0)
+    assert plausible(make(face))
+    upside_down = {k: [v[0], -v[1], v[2]] for k, v in face.items()}
+    swapped = {mirror_name(k) if k[-2:] in ("_l", "_r") else k: v for k, v in face.items()}
+    hollow = {k: [-v[0], v[1], -v[2]] for k, v in face.items()}    # seen from behind: turned 180 degrees
+    hollow = {mirror_name(k) if k[-2:] in ("_l", "_r") else k: v for k, v in hollow.items()}
+    assert not plausible(make(upside_down)) and not plausible(make(swapped)) and not plausible(make(hollow))
 
 
 def test_missing_detector_names_the_extra(monkeypatch):
@@ -196,7 +242,7 @@ def test_views_that_disagree_drop_the_name():
             px = real(image)
             if px is not None:
                 k = next(calls)
-                px[list(MEDIAPIPE_POINTS["pronasale"])] += [(-1) ** k * 40.0 * k, 0.0]
+                px[list(MEDIAPIPE_POINTS["pronasale"]), 0] += (-1) ** k * 40.0 * k
             return px
 
     found = LandmarkDetector(detector=Jittery()).detect(*default_head())
