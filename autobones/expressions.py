@@ -273,8 +273,8 @@ class ExpressionModel:
             f = rig.fields.get(f"muscle/{nm}")
             if f is not None:
                 infl[i] = np.asarray(f, dtype=np.float64).reshape(n)
-        dirs = mj.directions
         G = np.zeros((k, n, 3))
+        all_tree = cKDTree(Vc)
         total = np.zeros(n)
         self.wires_ = []
         for i, nm in enumerate(mj.names):
@@ -295,15 +295,14 @@ class ExpressionModel:
             else:
                 gate, side = None, "both"
             d0 = float(spec["dropoff"]) * mj.widths[i]
-            Wm = wire_weights(Vc, Q, d0, gate=None if gate is None else gate * skin, tree=None) \
-                if gate is not None else wire_weights(Vc, Q, d0, gate=skin.astype(np.float64))
+            Wm = wire_weights(Vc, Q, d0, gate=skin * (1.0 if gate is None else gate), tree=all_tree)
             # point constraint per control vertex: own locator (001 profile), neighbours, rest
             prof = np.where(t <= 1.0, np.sin(0.5 * np.pi * np.clip(t, 0, 1) ** 0.48),
                             np.cos(0.5 * np.pi * np.clip((t - 1.0) / 0.25, 0.0, 1.0)))
             cw = cross * infl[:, cv_idx].T                                   # (cvs, k)
             cw[:, i] = prof
-            for j2, nm2 in enumerate(mj.names):                              # same-type muscles only pull their own side
-                if j2 != i and (mj.sides[j2] != mj.sides[i] and "m" not in (mj.sides[j2], mj.sides[i])):
+            for j2 in range(k):                                   # neighbours pull from their own side only
+                if j2 != i and mj.sides[j2] != mj.sides[i] and "m" not in (mj.sides[j2], mj.sides[i]):
                     cw[:, j2] = 0.0
             cw = cw / (rest_w + cw.sum(axis=1, keepdims=True))
             for j2 in np.flatnonzero(cw.max(axis=0) > 0):
@@ -632,7 +631,7 @@ class ExpressionModel:
         c = np.asarray(contractions, dtype=np.float64).reshape(-1)
         if c.shape != (len(self.muscle_names_),):
             raise AutobonesError(f"contractions: expected {len(self.muscle_names_)} values, got {c.shape}")
-        Vc, N = self.canonical_, self.normals_
+        Vc = self.canonical_
         d = np.tensordot(c, self.muscle_basis_, axes=1) if np.any(c) else np.zeros_like(Vc)
         # skull non-penetration: sink at most the soft-tissue thickness along the rest normal
         if np.any(c):
