@@ -436,8 +436,7 @@ def main(argv=None):
     from scipy.spatial.transform import Rotation
 
     turns = Rotation.random(2 if args.quick else 4, random_state=0).as_matrix()
-    print("
-arbitrary rotations (scipy Rotation.random, seed 0), x1000: ", end="")
+    print("\narbitrary rotations (scipy Rotation.random, seed 0), x1000: ", end="")
     out = []
     for R in turns:
         try:
