@@ -21,10 +21,26 @@ influence fields, regions, skeleton and skin weights, landmarks):
    locally parallel to the skin).
 3. creases: frontalis contractions press horizontal furrows into the forehead,
    corrugator ones vertical furrows between the brows.
-4. eyelids (four lid joints rotating about the eye pivots) and bone movements:
-   jaw, head and neck rotations blended by the rig's skin weights (linear blend
-   skinning), with the jaw weight sharpened across the mouth line so the jaw
-   opens the lower lip only; eyeballs gaze through their eye bones.
+4. eyelids (four lid joints rotating about the eye pivots, weights built from
+   the palpebral landmarks, fading to the eye corners) and bone movements: the
+   jaw turns each vertex about its pivot by its jaw weight times the angle, that
+   weight sharpened across the mouth line (so the jaw opens the lower lip only)
+   and spread under the chin (so the skin there stretches); head and neck
+   rotations blend by the rig's skin weights (linear blend skinning); eyeballs
+   gaze through their eye bones (yaw/pitch, or an aim point).
+
+Stages 1 and 3 are linear in the contractions (``muscle_basis_``), stage 2 is a
+clamp that only acts where the skin would sink into the skull, stage 4 is a
+rotation per vertex: a fit can search the contraction vector, jaw angle and lid
+amounts directly (:meth:`ExpressionModel.pose_parameters`).
+
+What the model needs comes through ``transfer`` and is saved with the rig: the
+skeleton and skin weights, ``rig.extra['muscles']`` (origins, insertions,
+``width_canonical``), ``rig.extra['landmarks']`` (stomion, cheilions, palpebrale
+points, exocanthions, menton; missing ones fall back to the muscles and eye
+bones), ``rig.fields`` (``muscle/<name>``, ``region``), ``rig.frame``. Fitting
+is deterministic and takes under a second on a 27k-vertex head; posing takes
+a few milliseconds.
 
 Everything is computed in the head's canonical frame (+Y up, +Z front, +X the
 subject's left, head sizes) and returned in the input frame and units. Lengths in
@@ -577,6 +593,12 @@ class ExpressionModel:
         if side is not None:
             names = [p for p in names if p.endswith("_" + side)]
         return np.array([float(p in names) for p in LIDS])
+
+    def muscle_fields(self):
+        """(k, n, 3) skin displacement per unit contraction of each muscle, input frame and units
+        (before the skull clamp, creases and bones): the linear part of the model, for fitting."""
+        self._check()
+        return (self.muscle_basis_ * self.frame_.size) @ self.frame_.rotation
 
     # ------------------------------------------------------------------------------ posing
     def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,

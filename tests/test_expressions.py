@@ -219,6 +219,12 @@ def test_deterministic_linear_and_fast(model):
     assert np.allclose(G, 0.5 * np.tensordot(m.parameters(au={12: 1})["contractions"], m.muscle_basis_, 1)
                        + 0.3 * np.tensordot(m.parameters(au={4: 1})["contractions"], m.muscle_basis_, 1))
     assert np.array_equal(m.pose_parameters(p["contractions"], p["jaw_deg"], p["eyelids"]), m.pose(au={12: 0.5, 4: 0.3}))
+    # away from the skull the posed skin is the neutral plus the muscle fields, in the input frame
+    one = np.zeros(len(m.muscle_names_))
+    one[m.muscle_names_.index("zygomaticus_major_l")] = 0.5
+    moved = m.pose_parameters(one) - rig.vertices
+    free = ~m.clamp_
+    assert np.allclose(moved[free], 0.5 * m.muscle_fields()[m.muscle_names_.index("zygomaticus_major_l")][free])
     t = time.perf_counter()
     for _ in range(5):
         m.pose(expression="surprise", gaze=(5, 0), head_deg=(5, 10, 0))
