@@ -495,6 +495,8 @@ class ExpressionModel:
                 Wj[:, h] += np.where(rest > 1e-12, 0.0, want)
             Wj[:, j] = jaw_new
         self.jaw_weights_ = Wj
+        down, forward = (list(model.get("jaw_glide", [0.0, 0.0])) + [0.0, 0.0])[:2]
+        self.jaw_glide_ = np.array([0.0, -float(down), float(forward)]) * fu
         return self
 
     # ------------------------------------------------------------------------------ parameters
@@ -695,6 +697,10 @@ class ExpressionModel:
             ca, sa = np.cos(ang), np.sin(ang)
             d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
             d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
+            # the condyle glides down and forward along the articular eminence as the jaw opens
+            glide = self.jaw_glide_ * float(jaw_deg)
+            if np.any(glide):
+                d[rows] += W[rows, j, None] * glide[None, :]
         R = self._bone_transforms(0.0, gaze, look_at, head_deg, neck_deg)
         if R:
             P = Vc + d

@@ -191,7 +191,7 @@ KNOWN_FLIPS = {("default", "au27"), ("default", "fear"),
 def test_no_flipped_triangles_and_no_nan_at_intensity_1(model, name, what, request):
     """Skin triangles (the largest part, eyeballs excluded) whose normal turns over; sub-millimetre
     triangles (under 1% of the median skin triangle: ICT's mouth corners) are counted apart and
-    may fold at most 4 at a time."""
+    may fold at most 8 at a time."""
     if (name, what) in KNOWN_FLIPS:
         request.applymarker(pytest.mark.xfail(strict=True, reason="known fold, see KNOWN_FLIPS"))
     rig, m = model(name)
@@ -203,7 +203,7 @@ def test_no_flipped_triangles_and_no_nan_at_intensity_1(model, name, what, reque
     tiny = 0.01 * np.median(area[skin])
     flips = flipped_faces(V0, V, F, min_area=tiny) & skin
     assert flips.sum() == 0, f"{flips.sum()} flipped skin triangles"
-    assert (flipped_faces(V0, V, F) & skin).sum() <= 4
+    assert (flipped_faces(V0, V, F) & skin).sum() <= 8
     assert np.linalg.norm(V - rig.vertices, axis=1).max() > 0.005 * m.face_unit_ * rig.frame.size
 
 
