@@ -560,6 +560,10 @@ class LandmarkDetector:
         names = [n for n in table]
         Xn = np.stack([X[:, list(table[n])].mean(axis=1) for n in names], axis=1)
         wn = np.stack([w[:, list(table[n])].min(axis=1) for n in names], axis=1)
+        # a name every view saw only grazing or on a surface facing away (an eye corner whose
+        # nearest vertex is on the eyeball) still has its points: count them all alike
+        unseen = ~(wn > 0).any(axis=0)
+        wn[:, unseen] = np.all(np.isfinite(Xn[:, unseen]), axis=2).astype(np.float64)
         comb = weighted_median(Xn, wn)
         # the unit: ex-ex of the combined points
         iex = names.index("exocanthion_l"), names.index("exocanthion_r")

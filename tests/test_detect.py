@@ -126,6 +126,15 @@ def test_ict_identity_landmarks_match_the_published_ones(ict):
                                        rel=0.1)
 
 
+def test_one_view_still_gives_every_name(ict):
+    """Seen only from the front, the ICT eye corners' nearest vertices are on the eyeballs (a
+    surface facing away): their points still count instead of vanishing."""
+    V, F, truth, _ = ict
+    found = LandmarkDetector(views=((0.0, 0.0),)).detect(V, F)
+    err = errors(found, truth)
+    assert len(err) == 27 and np.mean(list(err.values())) < 6.0, err
+
+
 def test_scan_landmarks_match_the_published_ones():
     path = data("menpo3d/james.obj")
     found = autobones.detect_landmarks(str(path))
