@@ -5,6 +5,8 @@ Public API::
     import autobones
     rig = autobones.place("scan.obj", density="dense")
     rig.save("scan.glb")          # + scan.rig.json, scan.weights.npz
+    rig = autobones.load_rig("head.glb")    # a saved transferred rig, posed:
+    V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
 """
 __version__ = "0.1.0"
 
@@ -19,6 +21,7 @@ from .attributes import transfer_attributes
 from .labelled_rig import LabelledRig
 from .detect import detect_landmarks
 from .expressions import ExpressionModel
+from .load import load_rig
 
 
 def build_rig(base, landmarks, **kwargs):
@@ -32,5 +35,5 @@ def build_rig(base, landmarks, **kwargs):
     lm, _ = resolve_landmarks(landmarks)
     return _build(V, F, lm, **kwargs)
 
-__all__ = ["AutobonesError", "ExpressionModel", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh",
+__all__ = ["AutobonesError", "ExpressionModel", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh", "load_rig",
            "place", "transfer", "transfer_attributes", "__version__"]

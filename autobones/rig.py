@@ -110,9 +110,12 @@ class Rig:
 
     def expression_model(self, definitions=None):
         """The :class:`autobones.expressions.ExpressionModel` of this rig (built on first use and
-        kept; needs the muscles of ``transfer``)."""
+        kept; needs the muscles of ``transfer``). ``definitions`` None: the ones a loaded rig's
+        sidecar kept (``extra['expressions']['definitions']``), else ``generic_rig/expressions.json``."""
         from .expressions import ExpressionModel
 
+        if definitions is None:  # a loaded rig poses with the definitions its sidecar kept
+            definitions = (self.extra.get("expressions") or {}).get("definitions")
         cached = self.__dict__.get("_expression_model")
         if cached is None or cached.definitions is not definitions:
             cached = ExpressionModel(definitions).fit(self)
@@ -129,12 +132,45 @@ class Rig:
                                             eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
                                             neck_deg=neck_deg)
 
-    def save(self, path):
+    def expression_record(self, targets=(), skipped=()):
+        """The sidecar's ``expressions`` entry (rigs with muscles; None otherwise): the definitions
+        the model poses with (``format``, their ``sha256``, the whole ``definitions``) and the morph
+        targets written to the glb (``name``, ``au``, the AU's ``label``, ``max_displacement`` in
+        mesh units) and those ``skipped`` as all zero on this head."""
+        if not self.extra.get("muscles"):
+            return None
+        from .expressions import load_expressions
+        from .morph_targets import definitions_digest
+
+        model = self.__dict__.get("_expression_model")
+        doc = model.doc_ if model is not None and hasattr(model, "doc_") else load_expressions(
+            (self.extra.get("expressions") or {}).get("definitions"))
+        aus = doc.get("action_units", {})
+        return {"format": doc.get("format"), "sha256": definitions_digest(doc),
+                "morph_targets": [{"name": name, "au": name[2:], "label": aus.get(name[2:].rstrip("LR"), {}).get("name"),
+                                   "max_displacement": float(np.linalg.norm(d, axis=1).max())}
+                                  for name, d in targets],
+                "morph_targets_skipped": list(skipped), "definitions": doc}
+
+    def save(self, path, expressions=False):
         """Write ``path`` (.glb), its ``.rig.json`` sidecar and ``.weights.npz``.
 
         All three are written to temporary files in the target folder first and
         renamed only when every one is complete, so a failure leaves no partial
         output. Returns the three paths.
+
+        Parameters
+        ----------
+        path : str
+            Output ``.glb``; the sidecars go beside it (:func:`sidecar_paths`).
+        expressions : bool, "sides" or sequence of AU keys
+            Also write FACS action units as glTF morph targets (``AU12``..., each the
+            displacement at intensity 1 from the neutral mesh, computed on this head by
+            :meth:`expression_model`; see :mod:`autobones.morph_targets`). True: one per AU of
+            the definitions, both sides; ``"sides"``: also ``AU12L``/``AU12R``; a list: those.
+            Needs the muscles of ``transfer``. Rigs with muscles always record the
+            expression definitions in the sidecar (``expressions``), so a loaded rig
+            poses any mix the same way.
         """
         path = os.fspath(path)
         if not path.lower().endswith(".glb"):
@@ -142,6 +178,15 @@ class Rig:
         folder = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(folder):
             raise AutobonesError(f"{path}: the folder {folder} does not exist")
+        morphs, skipped = [], []
+        if expressions is not False and expressions is not None:
+            from .morph_targets import au_morph_targets
+
+            morphs, skipped = au_morph_targets(self.expression_model(), expressions)
+        record = self.expression_record(morphs, skipped)
+        side = self.sidecar()
+        if record is not None:
+            side["expressions"] = record
         json_path, npz_path = sidecar_paths(path)
         targets = [path, json_path, npz_path]
         temps = []
@@ -152,12 +197,14 @@ class Rig:
                 temps.append(tmp)
             write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
                       extras={"autobones": {"sidecar": os.path.basename(json_path)}},
-                      markers=self.muscle_markers())
+                      markers=self.muscle_markers(), morph_targets=morphs)
             with open(temps[1], "w") as fh:
-                json.dump(self.sidecar(), fh, indent=1)
+                json.dump(side, fh, indent=1)
             with open(temps[2], "wb") as fh:
+                # the glb has float32 positions: the exact input vertices are kept here (load_rig)
                 np.savez_compressed(fh, weights=self.weights.astype(np.float32),
                                     bone_names=np.array(self.skeleton.names),
+                                    vertices=np.asarray(self.vertices, dtype=np.float64),
                                     **{f"field/{k}": v for k, v in self.fields.items()})
             for tmp, target in zip(temps, targets):
                 os.replace(tmp, target)

@@ -74,7 +74,7 @@ def _quaternion(R):
     return (q * np.sign(q[3] or 1.0)).tolist()
 
 
-def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()):
+def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=(), morph_targets=()):
     """Write the skinned mesh to ``path``.
 
     Parameters
@@ -94,6 +94,12 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
     markers : sequence of (name, bone name, (3,) position)
         Extra named nodes (no mesh, not joints) parented to a bone, so they
         follow it when posed: e.g. muscle origins and insertions.
+    morph_targets : sequence of (name, (n, 3) float)
+        Optional morph targets (blend shapes): per-vertex POSITION displacements in
+        the frame and units of ``V`` (written as float32 with their min/max), named
+        in ``meshes[0].extras.targetNames`` (the names Blender, three.js and Babylon
+        give the shape keys), default weights 0 so the rest pose is unchanged. glTF
+        applies them before skinning. None given: the file is exactly as without them.
     """
     V = np.asarray(V, dtype=np.float32)
     F = np.asarray(F, dtype=np.uint32)
@@ -145,18 +151,29 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
     jnt = add(joints.astype(jdtype), jtype, "VEC4", ARRAY_BUFFER)
     wgt = add(weights, FLOAT, "VEC4", ARRAY_BUFFER)
     inv = add(ibm, FLOAT, "MAT4")
+    targets, target_names = [], []
+    for name, delta in morph_targets:
+        delta = np.asarray(delta, dtype=np.float32)
+        if delta.shape != V.shape:
+            raise ValueError(f"morph target {name!r}: shape {delta.shape}, expected {V.shape}")
+        targets.append({"POSITION": add(delta, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)})
+        target_names.append(str(name))
 
     mesh_node = len(nodes)
     n_joints = len(skeleton)
     roots = [i for i, p in enumerate(skeleton.parents) if p < 0]
+    primitive = {"attributes": {"POSITION": pos, "JOINTS_0": jnt, "WEIGHTS_0": wgt}, "indices": ind, "mode": 4}
+    mesh = {"name": "head_mesh", "primitives": [primitive]}
+    if targets:
+        primitive["targets"] = targets
+        mesh["weights"] = [0.0] * len(targets)
+        mesh["extras"] = {"targetNames": target_names}
     doc = {
         "asset": {"version": "2.0", "generator": "autobones", **({"extras": extras} if extras else {})},
         "scene": 0,
         "scenes": [{"nodes": roots + [mesh_node]}],
         "nodes": nodes + [{"name": "head_mesh", "mesh": 0, "skin": 0}],
-        "meshes": [{"name": "head_mesh", "primitives": [{
-            "attributes": {"POSITION": pos, "JOINTS_0": jnt, "WEIGHTS_0": wgt},
-            "indices": ind, "mode": 4}]}],
+        "meshes": [mesh],
         "skins": [{"name": "rig", "joints": list(range(n_joints)), "skeleton": roots[0],
                    "inverseBindMatrices": inv}],
         "accessors": accessors,
@@ -171,3 +188,60 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         fh.write(struct.pack("<4sII", b"glTF", 2, total))
         fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
         fh.write(struct.pack("<I4s", len(body), b"BIN\0") + body)
+
+
+def read_glb(path):
+    """The JSON document and BIN chunk of a binary glTF file.
+
+    Parameters
+    ----------
+    path : str
+        A ``.glb`` file.
+
+    Returns
+    -------
+    doc : dict
+        The JSON chunk.
+    body : bytes
+        The binary chunk (empty when there is none).
+
+    Raises ``ValueError`` (with what is wrong) when the file is not a readable binary glTF 2.0.
+    """
+    with open(path, "rb") as fh:
+        data = fh.read()
+    if len(data) < 20 or data[:4] != b"glTF":
+        raise ValueError("not a binary glTF file (no 'glTF' header)")
+    _, version, total = struct.unpack_from("<4sII", data, 0)
+    if version != 2:
+        raise ValueError(f"glTF version {version}, expected 2")
+    off, doc, body = 12, None, b""
+    while off + 8 <= min(total, len(data)):
+        length, kind = struct.unpack_from("<I4s", data, off)
+        chunk = data[off + 8:off + 8 + length]
+        if len(chunk) != length:
+            raise ValueError("the file is truncated")
+        if kind == b"JSON":
+            doc = json.loads(chunk)
+        elif kind == b"BIN\0":
+            body = chunk
+        off += 8 + length
+    if not isinstance(doc, dict):
+        raise ValueError("no JSON chunk")
+    return doc, body
+
+
+def read_accessor(doc, body, index):
+    """Accessor ``index`` as a numpy array, (count,) or (count, width): the tightly packed,
+    non-sparse accessors :func:`write_glb` writes."""
+    acc = doc["accessors"][index]
+    view = doc["bufferViews"][acc["bufferView"]]
+    dtype = np.dtype({UBYTE: "<u1", USHORT: "<u2", UINT: "<u4", FLOAT: "<f4"}[acc["componentType"]])
+    width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}[acc["type"]]
+    if view.get("byteStride") not in (None, dtype.itemsize * width) or "sparse" in acc:
+        raise ValueError(f"accessor {index}: interleaved or sparse data is not supported")
+    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    count = acc["count"] * width
+    if start + count * dtype.itemsize > len(body):
+        raise ValueError(f"accessor {index} runs past the end of the binary chunk")
+    a = np.frombuffer(body, dtype=dtype, count=count, offset=start)
+    return a.reshape(acc["count"], width) if width > 1 else a

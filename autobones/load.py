@@ -1,0 +1,127 @@
+"""Read a rig back from the files ``Rig.save`` writes: ``x.glb``, ``x.rig.json``, ``x.weights.npz``.
+
+Goes beyond the seeds: the saved rig is the hand-off between rigging and animation, so
+``autobones.load_rig("head.glb").pose(au={12: 0.8})`` must give what the in-memory rig
+gave. The glb supplies the triangles (and, for files saved before the sidecar kept them,
+the float32 positions); the sidecar the frame, bones, labels, muscles, landmarks and
+expression definitions; the npz the full weight matrix, every field and the exact float64
+vertices.
+"""
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+
+import numpy as np
+
+from .errors import AutobonesError
+from .io.gltf import read_accessor, read_glb
+from .orient import Frame
+from .rig import Rig, sidecar_paths
+from .skeleton import Skeleton
+
+# sidecar keys the Rig rebuilds itself; every other key goes back into ``rig.extra``
+_OWN_KEYS = ("format", "autobones_version", "options", "frame", "vertex_count", "bones", "label_names", "labels",
+             "facial_mask", "depth_merge_distances")
+
+
+def load_rig(path):
+    """The :class:`autobones.rig.Rig` saved as ``path`` (a ``.glb`` written by autobones) and its sidecars.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``x.glb`` (or ``x.rig.glb``); ``x.rig.json`` and ``x.weights.npz`` must sit beside it.
+
+    Returns
+    -------
+    Rig
+        ``vertices`` (n, 3) float64 in the input frame and units: the exact input vertices
+        kept in the npz (rigs saved before it kept them: the glb's float32 positions),
+        ``faces`` (m, 3) int64 from the glb, ``skeleton``, ``weights`` (n, b) float64 (saved
+        as float32), ``labels``, ``facial_mask``, ``frame``, ``options``, ``fields`` and
+        ``extra`` (muscles, landmarks, expression definitions...). ``rig.pose(...)`` works
+        when the rig has muscles (``transfer``); the model is fitted again on first use
+        (about a second on a 27k-vertex head) with the definitions the sidecar kept.
+        ``segmentation`` and ``timings`` are not saved (None, {}).
+
+    Raises
+    ------
+    AutobonesError
+        The glb is missing, unreadable or not written by autobones, a sidecar is missing or
+        corrupt, or the three files do not belong together (vertex or bone counts differ).
+
+    Example
+    -------
+    >>> rig = autobones.load_rig("head.glb")
+    >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
+    """
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise AutobonesError(f"{path}: no such file")
+    try:
+        doc, body = read_glb(path)
+    except (OSError, ValueError) as exc:
+        raise AutobonesError(f"{path}: cannot read it as a glb ({exc})") from None
+    asset = doc.get("asset") or {}
+    if asset.get("generator") != "autobones":
+        raise AutobonesError(f"{path}: not a rig written by autobones (generator {asset.get('generator')!r}); "
+                             "rig the mesh first: autobones transfer HEAD -o OUT.glb")
+    json_path, npz_path = sidecar_paths(path)
+    for side in (json_path, npz_path):
+        if not os.path.isfile(side):
+            raise AutobonesError(f"{path}: its sidecar {side} is missing (autobones writes the glb, "
+                                 f"{os.path.basename(json_path)} and {os.path.basename(npz_path)} together; "
+                                 "keep them beside each other)")
+    try:
+        with open(json_path, encoding="utf-8") as fh:
+            meta = json.load(fh)
+        if not isinstance(meta, dict) or meta.get("format") != "autobones-rig/1":
+            raise ValueError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
+                             "expected 'autobones-rig/1'")
+        n = int(meta["vertex_count"])
+        bones = meta["bones"]
+        names = [str(b["name"]) for b in bones]
+        skeleton = Skeleton(names, [names.index(b["parent"]) if b["parent"] is not None else -1 for b in bones],
+                            [b["head"] for b in bones], [b["tail"] for b in bones])
+        fr = meta["frame"]
+        frame = Frame(np.asarray(fr["rotation"], dtype=np.float64), np.asarray(fr["origin"], dtype=np.float64),
+                      float(fr["head_size"]), float(fr.get("symmetry_error", float("nan"))))
+        labels = np.asarray(meta["labels"], dtype=np.int8)
+        mask = np.zeros(n, dtype=bool)
+        mask[np.asarray(meta.get("facial_mask", []), dtype=np.int64)] = True
+    except (OSError, ValueError, KeyError, TypeError, IndexError, AssertionError) as exc:
+        raise AutobonesError(f"{json_path}: not a readable autobones sidecar ({type(exc).__name__}: {exc})") from None
+    try:
+        with np.load(npz_path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        W = arrays["weights"].astype(np.float64)
+        saved_names = [str(s) for s in arrays.get("bone_names", names)]
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
+        raise AutobonesError(f"{npz_path}: not a readable autobones weights file ({type(exc).__name__}: {exc})") from None
+    try:
+        prim = doc["meshes"][0]["primitives"][0]
+        F = read_accessor(doc, body, prim["indices"]).astype(np.int64).reshape(-1, 3)
+        P = read_accessor(doc, body, prim["attributes"]["POSITION"])
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise AutobonesError(f"{path}: its mesh cannot be read ({type(exc).__name__}: {exc})") from None
+    V = arrays.get("vertices")
+    V = P.astype(np.float64) if V is None else np.asarray(V, dtype=np.float64)
+    problems = []
+    if len(P) != n or V.shape != (n, 3) or labels.shape != (n,):
+        problems.append(f"vertex counts differ (glb {len(P)}, sidecar {n}, npz {len(V)})")
+    elif np.abs(V.astype(np.float32) - P).max(initial=0.0) > 0:
+        problems.append("the npz vertices are not the glb's")
+    if W.shape != (n, len(names)) or saved_names != names:
+        problems.append(f"the weights ({W.shape[0]} x {W.shape[1] if W.ndim == 2 else '?'}, bones "
+                        f"{', '.join(saved_names[:3])}...) do not match the sidecar's {len(names)} bones")
+    if len(F) and (F.min() < 0 or F.max() >= len(P)):
+        problems.append("triangle indices out of range")
+    if problems:
+        raise AutobonesError(f"{path}: the glb and its sidecars do not belong together: {'; '.join(problems)} "
+                             "(save the rig again)")
+    fields = {k[len("field/"):]: v for k, v in arrays.items() if k.startswith("field/")}
+    extra = {k: v for k, v in meta.items() if k not in _OWN_KEYS}
+    return Rig(vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=mask, frame=frame,
+               options=dict(meta.get("options") or {}), extra=extra, fields=fields)
