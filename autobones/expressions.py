@@ -602,6 +602,39 @@ class ExpressionModel:
         self._check()
         return (self.muscle_basis_ * self.frame_.size) @ self.frame_.rotation
 
+    def linear_pose(self, jaw_deg=0.0, eyelids=None):
+        """The pose as an affine map of the contractions for fixed jaw and lids (for fitting).
+
+        Parameters
+        ----------
+        jaw_deg : float
+            Jaw opening, degrees.
+        eyelids : (4,) float, optional
+            Lid amounts in :data:`LIDS` order.
+
+        Returns
+        -------
+        A : (k, n, 3) float
+            Displacement per unit contraction (muscle fields and creases carried by the lid
+            and jaw rotations), input frame and units.
+        b : (n, 3) float
+            The posed vertices at zero contraction, input frame and units.
+
+        ``b + tensordot(c, A, 1)`` equals ``pose_parameters(c, jaw_deg, eyelids)`` wherever the
+        skull clamp does not act (the lid and jaw stages are a fixed rotation per vertex).
+        """
+        self._check()
+        n = len(self.canonical_)
+        const = self._bones(np.zeros((n, 3)), jaw_deg, eyelids)
+        R = np.stack([self._bones(np.tile(np.eye(3)[a], (n, 1)), jaw_deg, eyelids) - const for a in range(3)],
+                     axis=2)                                             # (n, 3, 3): column a = image of e_a
+        G = self.muscle_basis_.copy()
+        for i, K in self.crease_basis_.items():
+            G[i] += K
+        A = np.einsum("nij,knj->kni", R, G)
+        rot, size = self.frame_.rotation, self.frame_.size
+        return (A * size) @ rot, self.vertices_ + (const * size) @ rot
+
     # ------------------------------------------------------------------------------ posing
     def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
              head_deg=None, neck_deg=None):
@@ -667,6 +700,15 @@ class ExpressionModel:
             for i, K in self.crease_basis_.items():
                 if c[i] != 0:
                     d += c[i] * K
+        return self.vertices_ + (self._bones(d, jaw_deg, eyelids, gaze, look_at, head_deg, neck_deg)
+                                 * self.frame_.size) @ self.frame_.rotation
+
+    def _bones(self, d, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None, neck_deg=None):
+        """Stage 4 on the canonical (n, 3) muscle-stage displacement ``d``: the lids, jaw, head,
+        neck and eyes. Returns the canonical displacement (n, 3), head sizes. For fixed bone
+        parameters it is affine in ``d`` per vertex (a rotation plus a translation)."""
+        Vc = self.canonical_
+        d = np.array(d, dtype=np.float64)
         # eyelids: four lid joints rotating about the eye pivots (canonical +X axis)
         lids = np.zeros(4) if eyelids is None else np.asarray(eyelids, dtype=np.float64).reshape(4)
         for q in np.flatnonzero(lids):
@@ -709,7 +751,7 @@ class ExpressionModel:
                 rows = np.flatnonzero(w != 0)
                 if len(rows):
                     d[rows] += w[rows, None] * (P[rows] @ (Rb - np.eye(3)).T + tb)
-        return self.vertices_ + (d * self.frame_.size) @ self.frame_.rotation
+        return d
 
     def _bone_transforms(self, jaw_deg, gaze, look_at, head_deg, neck_deg):
         """World transforms (R, t) of the bones that move, canonical frame: x -> R x + t."""

@@ -232,12 +232,218 @@ def fmt(x):
     return "-" if np.isnan(x) else f"{100 * x:.1f}"
 
 
+# ---------------------------------------------------------------- full rig (parts 1 and 2)
+REGIONS = [("brow", ("forehead", "brow")), ("eyelids", ("eyelids",)), ("nose", ("nose",)),
+           ("cheeks", ("cheeks",)), ("lips", ("lips",)), ("chin/jaw", ("chin", "jaw"))]
+JAW_GRID = np.arange(-2.0, 30.1, 2.0)
+LID_GRID = np.linspace(-0.6, 1.3, 20)
+LID_BOUNDS = (-0.6, 1.3)
+JAW_BOUNDS = (-2.0, 30.0)
+C_MAX = 2.0
+
+
+def contraction_bounds(model):
+    """(k,) lower and upper bounds: muscles only pull (>= 0), except the frontalis joints, which
+    the model lengthens for AU4 (procerus / depressor supercilii are not among its muscles)."""
+    lo = np.array([-0.5 if t.startswith("frontalis") else 0.0 for t in model.joints_.types])
+    return lo, np.full(len(lo), C_MAX)
+
+
+def _solve_linear(model, X, sel, jaw, lids, lo, hi):
+    """Best contractions for fixed jaw / lids: bounded linear least squares on the unclamped
+    model (``linear_pose``) over the rows ``sel``, via a thin QR. Returns (c, residual norm)."""
+    import scipy.optimize
+
+    A, b = model.linear_pose(jaw, lids)
+    M = A[:, sel].reshape(len(A), -1).T                  # (3 m, k)
+    y = (X[sel] - b[sel]).ravel()
+    Q, R = np.linalg.qr(M)
+    qy = Q.T @ y
+    c = scipy.optimize.lsq_linear(R, qy, bounds=(lo, hi), method="bvls").x
+    r2 = float(np.sum((R @ c - qy) ** 2) + max(y @ y - qy @ qy, 0.0))
+    return c, np.sqrt(r2)
+
+
+def fit_rig(model, X, sel, refine=30):
+    """Rig parameters reproducing the target positions ``X`` (n, 3) over the vertices ``sel``.
+
+    Stage 1 (variable projection on a grid): for a jaw angle and lid amounts the pose is affine in
+    the 26 contractions (skull clamp aside), solved by bounded linear least squares; the jaw is
+    searched on a 2-degree grid (lids 0), then each of the 4 lids on a 0.1 grid in turn (the
+    others held), then the jaw again on a 0.5-degree grid around its best.
+    Stage 2: ``scipy.optimize.least_squares`` (trf, finite differences, ``refine`` evaluations
+    at most) over all 31 parameters of the full nonlinear pose (``pose_parameters``, skull clamp
+    included), from stage 1, within the same bounds. Returns (contractions, jaw, lids, info).
+    """
+    import scipy.optimize
+
+    lo, hi = contraction_bounds(model)
+    lids = np.zeros(4)
+    best = min((( _solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in JAW_GRID))
+    jaw = best[1]
+    for q in range(4):
+        trials = []
+        for a in LID_GRID:
+            l2 = lids.copy()
+            l2[q] = a
+            trials.append((_solve_linear(model, X, sel, jaw, l2, lo, hi)[1], a))
+        lids[q] = min(trials)[1]
+    fine = np.clip(jaw + np.arange(-2.0, 2.01, 0.5), *JAW_BOUNDS)
+    jaw = min((_solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in fine)[1]
+    c, _ = _solve_linear(model, X, sel, jaw, lids, lo, hi)
+    x0 = np.r_[c, jaw, lids]
+    k = len(c)
+
+    def resid(x):
+        return (model.pose_parameters(x[:k], x[k], x[k + 1:]) - X)[sel].ravel()
+
+    r0 = np.linalg.norm(resid(x0))
+    info = {"stage1": r0, "stage2": r0}
+    if refine:
+        lb = np.r_[lo, JAW_BOUNDS[0], np.full(4, LID_BOUNDS[0])]
+        ub = np.r_[hi, JAW_BOUNDS[1], np.full(4, LID_BOUNDS[1])]
+        res = scipy.optimize.least_squares(resid, np.clip(x0, lb, ub), bounds=(lb, ub), method="trf",
+                                           x_scale=np.r_[np.full(k, 0.3), 5.0, np.full(4, 0.3)],
+                                           diff_step=1e-3, max_nfev=refine)
+        r1 = np.linalg.norm(res.fun)
+        if r1 < r0:
+            x0, info["stage2"] = res.x, r1
+    return x0[:k], float(x0[k]), x0[k + 1:], info
+
+
+def copy_through(P_src, P_dst, gF, V_src, F_src, D_src, V_dst):
+    """Per-vertex displacement copied from one head to another through the transfer's dense
+    correspondence: each generic vertex g sits at P_src[g] on the source and P_dst[g] on the
+    target; it takes the source displacement at its point (barycentric on the source triangle),
+    and each target vertex takes the displacement at its closest point on the generic mesh laid
+    on the target (P_dst, gF). Returns (n_dst, 3)."""
+    import igl
+
+    def bary(P, V, F):
+        _, fi, C = igl.point_mesh_squared_distance(np.ascontiguousarray(P), np.ascontiguousarray(V),
+                                                   np.ascontiguousarray(F))
+        T = F[fi]
+        B = igl.barycentric_coordinates(C, *(np.ascontiguousarray(V[T[:, a]]) for a in range(3)))
+        return T, B
+
+    T, B = bary(P_src, V_src, F_src)
+    Dg = np.einsum("na,nad->nd", B, D_src[T])
+    T, B = bary(V_dst, P_dst, gF)
+    return np.einsum("na,nad->nd", B, Dg[T])
+
+
+def region_masks(rig, skin):
+    """Named boolean masks: "all", "skin", "parts" (everything not skin: eyeballs, eyelashes,
+    eye-occlusion shells, teeth, tongue...) and the skin's regions (transferred ``region``)."""
+    labels = list(rig.extra["field_labels"]["region"])
+    reg = np.asarray(rig.fields["region"]).astype(int)
+    out = {"all": np.ones(len(skin), bool), "skin": skin, "parts": ~skin}
+    for name, members in REGIONS:
+        out[name] = skin & np.isin(reg, [labels.index(m) for m in members if m in labels])
+    return out
+
+
+def region_scores(Y, X, V, masks):
+    """explained per mask; nan ('-') where the mask carries under 10 % of the skin's
+    displacement norm (a region the expression hardly moves)."""
+    ds = np.linalg.norm((X - V)[masks["skin"]])
+    out = {}
+    for name, m in masks.items():
+        d = np.linalg.norm((X - V)[m])
+        out[name] = np.nan if (name not in ("all", "skin", "parts") and d < 0.1 * ds) or d == 0 else \
+            explained(Y, X, V, m)
+    return out
+
+
+def full_rig_benchmark(source="identity002", targets=("identity000", "identity001"), refine=30):
+    """Parts 1 and 2 of the proof; prints its table and returns the lines."""
+    from autobones.expressions import ExpressionModel
+    from autobones.transfer import load_generic
+
+    N0, F = load_mesh(NEUTRAL)
+    E = {}
+    for e in EXPRESSIONS:
+        X, Fe = load_mesh(ICT / f"{e}.obj")
+        assert X.shape == N0.shape and np.array_equal(Fe, F)
+        E[e] = X - N0                                     # the same displacement on every identity
+    gF = np.asarray(load_generic().faces)
+    heads = {}
+    for name in (source, *targets):
+        t = time.perf_counter()
+        det = {}
+        rig = autobones.transfer(str(ICT / f"{name}.obj"), str(ICT / f"{name}.landmarks.json"), details=det)
+        assert np.array_equal(rig.faces, F), f"{name}: not the ICT topology"
+        model = ExpressionModel().fit(rig)
+        heads[name] = (rig, model, det["correspondence"], region_masks(rig, model.skin_))
+        print(f"rigged {name}: transfer + model fit {time.perf_counter() - t:.1f} s", flush=True)
+    cols = ["all", "skin", "parts"] + [r for r, _ in REGIONS]
+    hdr = "| identity | method | expression | " + " | ".join(cols) + " |"
+    lines = [hdr, "|" + "---|" * (len(cols) + 3)]
+
+    def row(who, method, e, sc):
+        lines.append(f"| {who} | {method} | {e} | " + " | ".join(fmt(sc[c]) for c in cols) + " |")
+
+    rig_s, m_s, P_s, masks_s = heads[source]
+    Vs = rig_s.vertices
+    fits, summary, t_fit = {}, {}, time.perf_counter()
+    for e in EXPRESSIONS:
+        Xs = Vs + E[e]
+        row(source, "neutral", e, region_scores(Vs, Xs, Vs, masks_s))
+        for where in ("all", "skin"):
+            t = time.perf_counter()
+            c, jaw, lids, info = fit_rig(m_s, Xs, masks_s[where], refine=refine)
+            fits[e, where] = (c, jaw, lids)
+            Y = m_s.pose_parameters(c, jaw, lids)
+            sc = region_scores(Y, Xs, Vs, masks_s)
+            summary[source, where, e] = sc
+            row(source, f"full rig, fit on {where}", e, sc)
+            top = np.argsort(-c)[:4]
+            print(f"  {e} fit on {where}: {time.perf_counter() - t:.1f} s, stage 1 -> 2 residual "
+                  f"{info['stage1']:.3f} -> {info['stage2']:.3f}; jaw {jaw:.1f} deg, lids "
+                  f"{np.array2string(lids, precision=2)}, largest contractions "
+                  + ", ".join(f"{m_s.muscle_names_[i]} {c[i]:.2f}" for i in top if c[i] > 0.01), flush=True)
+    for tname in targets:
+        rig_t, m_t, P_t, masks_t = heads[tname]
+        Vt = rig_t.vertices
+        for e in EXPRESSIONS:
+            Xt = Vt + E[e]
+            row(tname, "neutral", e, region_scores(Vt, Xt, Vt, masks_t))
+            row(tname, "copy by vertex index", e, region_scores(Vt + E[e], Xt, Vt, masks_t))
+            Dc = copy_through(P_s, P_t, gF, Vs, F, E[e], Vt)
+            sc = region_scores(Vt + Dc, Xt, Vt, masks_t)
+            summary[tname, "copy", e] = sc
+            row(tname, "copy through the correspondence", e, sc)
+            for where in ("all", "skin"):
+                c, jaw, lids = fits[e, where]
+                sc = region_scores(m_t.pose_parameters(c, jaw, lids), Xt, Vt, masks_t)
+                summary[tname, where, e] = sc
+                row(tname, f"full rig, {source}'s fit on {where}", e, sc)
+    t_fit = time.perf_counter() - t_fit
+    print("\n".join(lines))
+    print("\ntargets: fit >= 80 % and transfer >= 70 % explained per expression (column 'all' / 'skin'):")
+    for key in [(source, "all"), (source, "skin")] + [(t, w) for t in targets for w in ("copy", "all", "skin")]:
+        v = [summary[key[0], key[1], e] for e in EXPRESSIONS]
+        print(f"  {key[0]} {key[1]:5s} " + "  ".join(f"{e} {fmt(s['all'])}/{fmt(s['skin'])}" for e, s in zip(EXPRESSIONS, v))
+              + f"   mean {fmt(np.mean([s['all'] for s in v]))}/{fmt(np.mean([s['skin'] for s in v]))}")
+    print(f"full-rig fits and transfers: {t_fit:.1f} s")
+    return lines
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
     ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
+    ap.add_argument("--part", choices=["all", "rig", "bones"], default="all",
+                    help="rig: the full-rig fit and transfer (parts 1, 2) only; bones: bones alone (part 3) only")
+    ap.add_argument("--refine", type=int, default=30,
+                    help="full rig: least_squares evaluations of the nonlinear refinement (0: grid + linear only)")
     args = ap.parse_args()
     sweeps = 0 if args.quick else args.sweeps
+    if args.part in ("all", "rig"):
+        full_rig_benchmark(refine=args.refine)
+        print()
+    if args.part == "rig":
+        return
 
     V, F = load_mesh(NEUTRAL)
     shapes = {}
