@@ -97,6 +97,50 @@ command (missing folder, overlapping folders, bad option).
 """
 
 
+def _pose_epilog():
+    """The pose command's help: examples, then the AUs and emotions of the data file."""
+    import json
+
+    try:
+        from generic_rig import expressions_path
+
+        with open(expressions_path(), encoding="utf-8") as fh:
+            doc = json.load(fh)
+        aus = "\n".join(f"  AU{k:<3} {v.get('name', '')}" for k, v in sorted(doc["action_units"].items(),
+                                                                          key=lambda kv: int(kv[0])))
+        emotions = "\n".join(f"  {k:<10} " + " + ".join(f"AU{a}" + (f"*{w:g}" if w != 1 else "")
+                                                        for a, w in v["au"].items())
+                             for k, v in doc["expressions"].items())
+    except (OSError, ValueError, KeyError, TypeError, ImportError) as exc:
+        aus = emotions = f"  (generic_rig/expressions.json could not be read: {exc})"
+    return f"""\
+examples:
+  autobones pose head.glb --expression happiness -o happy.obj           an emotion preset
+  autobones pose head.glb --au 12=0.8 --au 6=0.4 --jaw 10 -o smile.obj  FACS action units, jaw in degrees
+  autobones pose head.glb --au 12L=1 -o smirk.obj                       L / R: the subject's left / right half
+  autobones pose head.glb --expression surprise=0.5 --gaze 20,0 -o look.glb
+  autobones pose head.glb --eyelids upper=1 --head 0,30,0 -o turned.obj
+
+RIG.glb is a rig saved by `autobones transfer` (its muscles drive the skin), with
+RIG.rig.json and RIG.weights.npz beside it. The posed vertices are written in the
+rig's own frame and units, vertex i of the output = vertex i of the input mesh:
+OUT.obj (v and f lines) or OUT.glb (a static mesh, no skin).
+
+units: AU and expression intensities 0..1 (1 = the AU's full action; larger values
+extrapolate, negative ones reverse); --jaw, --gaze, --head, --neck in degrees; --jaw
+adds to the opening AU26/AU27 give. --eyelids PART=V: upper/lower (both eyes) or
+upper_l, upper_r, lower_l, lower_r; upper=1 closes the eye. --head/--neck PITCH,YAW,ROLL:
+pitch > 0 nods down, yaw > 0 turns to the subject's left. --gaze YAW,PITCH: yaw > 0 to
+the subject's left, pitch > 0 up.
+
+action units (generic_rig/expressions.json):
+{aus}
+
+emotions (seed 002 Table 3-3):
+{emotions}
+"""
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="autobones",
@@ -119,6 +163,7 @@ def build_parser():
     p.add_argument("--landmarks", help="optional landmark file: transfer the generic rig's neck, head, jaw and "
                                       "eyes first and place the facial bones on the transferred face")
     p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")
+    p.add_argument("--expressions", action="store_true", help=argparse.SUPPRESS)  # refused: place has no muscles
     _common(p)
 
     t = sub.add_parser(
@@ -137,7 +182,36 @@ def build_parser():
     t.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
     t.add_argument("--up", help="input axis that points up (default: detected; used to check left/right)")
     t.add_argument("--front", help="input axis the face looks along (default: detected)")
+    t.add_argument("--expressions", action="store_true",
+                   help="also write each FACS action unit as a morph target (AU1 ... AU43, intensity 1, "
+                        "computed on this head; see `autobones pose --help`)")
+    t.add_argument("--expression-sides", action="store_true",
+                   help="with the morph targets, also each AU's left and right halves (AU12L, AU12R); "
+                        "implies --expressions")
     _common(t)
+
+    q = sub.add_parser(
+        "pose", help="pose a saved transferred rig: FACS action units, emotions, jaw, eyelids, gaze",
+        description="Pose a rig saved by `autobones transfer` with its skin/muscle model (seed 000 section 4.2): "
+                    "FACS action units, emotion presets, muscle contractions, jaw opening, eyelids, eye gaze, "
+                    "head and neck turns. Writes the posed mesh.",
+        epilog=_pose_epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    q.add_argument("rig", metavar="RIG.glb", help="a glb written by autobones transfer, its sidecars beside it")
+    q.add_argument("-o", "--output", help="posed mesh, .obj or .glb (default: RIG_NAME.pose.obj in the current folder)")
+    q.add_argument("--expression", action="append", default=[], metavar="NAME[=W]",
+                   help="an emotion preset at intensity W (default 1); repeat to mix")
+    q.add_argument("--au", action="append", default=[], metavar="N=V",
+                   help="action unit N (12, AU12, 12L, 12R) at intensity V (default 1); repeat for more")
+    q.add_argument("--muscle", action="append", default=[], metavar="NAME=V",
+                   help="a muscle (zygomaticus_major_l) or muscle type (both sides) contracted by V")
+    q.add_argument("--jaw", default="0", metavar="DEG", help="jaw opening in degrees (default 0)")
+    q.add_argument("--eyelids", action="append", default=[], metavar="PART=V",
+                   help="eyelid amount: upper, lower, upper_l, upper_r, lower_l, lower_r (upper=1 closes)")
+    q.add_argument("--gaze", metavar="YAW,PITCH", help="both eyes turned, degrees")
+    q.add_argument("--look-at", metavar="X,Y,Z", help="a point (rig frame and units) both eyes aim at")
+    q.add_argument("--head", dest="head_deg", metavar="PITCH,YAW,ROLL", help="head rotation, degrees")
+    q.add_argument("--neck", dest="neck_deg", metavar="PITCH,YAW,ROLL", help="neck rotation, degrees")
+    _common(q)
 
     m = sub.add_parser(
         "landmarks", help="find the contract's landmarks on a human head automatically, or draw given ones",
@@ -201,6 +275,11 @@ def _common(p):
 def cmd_place(args):
     import autobones
 
+    if args.expressions:
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError("--expressions needs muscles, which place does not make; use "
+                             "autobones transfer HEAD --landmarks FILE --expressions -o OUT.glb")
     head = args.head
     out = args.output or _default_out(head)
     t = time.perf_counter()
@@ -224,7 +303,7 @@ def cmd_transfer(args):
     out = args.output or _default_out(args.head)
     t = time.perf_counter()
     rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
-    written = rig.save(out)
+    written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
     if rig.options.get("landmarks_source") == "detected":
         conf = rig.extra.get("landmark_confidence", {})
         dropped = rig.extra.get("landmarks_dropped", {})
@@ -234,7 +313,88 @@ def cmd_transfer(args):
     print(f"{written[0]}: {len(rig.skeleton)} bones, {len(rig.extra['muscles'])} muscles, "
           f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
           f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
-          f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
+          f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}"
+          + (f"; {_morph_target_count(written[1])} morph targets" if args.expressions or args.expression_sides else ""))
+    return 0
+
+
+def _morph_target_count(sidecar):
+    import json
+
+    with open(sidecar, encoding="utf-8") as fh:
+        return len(json.load(fh)["expressions"]["morph_targets"])
+
+
+def _number(text, what):
+    from autobones.errors import AutobonesError
+
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        raise AutobonesError(f"{what}: {text!r} is not a number") from None
+    if v != v or v in (float("inf"), float("-inf")):
+        raise AutobonesError(f"{what}: {text!r} is not a finite number")
+    return v
+
+
+def _pairs(items, option, default=None):
+    """``["12=0.8", "6"]`` -> ``{"12": 0.8, "6": default}``; values summed when a key repeats."""
+    from autobones.errors import AutobonesError
+
+    out = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        key = key.strip()
+        if not key:
+            raise AutobonesError(f"{option} {item!r}: expected NAME=VALUE")
+        if not eq and default is None:
+            raise AutobonesError(f"{option} {item!r}: expected NAME=VALUE (e.g. {option} upper=1)")
+        out[key] = out.get(key, 0.0) + (_number(value, f"{option} {item}") if eq else default)
+    return out
+
+
+def _vector(text, n, option):
+    from autobones.errors import AutobonesError
+
+    if text is None:
+        return None
+    parts = [p for p in text.replace(" ", "").split(",")]
+    if len(parts) != n:
+        raise AutobonesError(f"{option} {text!r}: expected {n} comma-separated numbers")
+    return [_number(p, f"{option} {text}") for p in parts]
+
+
+def cmd_pose(args):
+    import numpy as np
+
+    import autobones
+    from autobones.io.posed import write_posed_mesh
+
+    t = time.perf_counter()
+    au = {k.upper().removeprefix("AU"): v for k, v in _pairs(args.au, "--au", default=1.0).items()}
+    expression = _pairs(args.expression, "--expression", default=1.0)
+    muscles = _pairs(args.muscle, "--muscle")
+    eyelids = _pairs(args.eyelids, "--eyelids")
+    jaw = _number(args.jaw, "--jaw")
+    gaze, look_at = _vector(args.gaze, 2, "--gaze"), _vector(args.look_at, 3, "--look-at")
+    head_deg, neck_deg = _vector(args.head_deg, 3, "--head"), _vector(args.neck_deg, 3, "--neck")
+    out = args.output or os.path.splitext(os.path.basename(args.rig))[0].removesuffix(".rig") + ".pose.obj"
+    if os.path.splitext(out)[1].lower() not in (".obj", ".glb"):
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
+    rig = autobones.load_rig(args.rig)
+    V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
+                 eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
+    what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
+                     + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
+                     + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
+                     + ([f"gaze {args.gaze}"] if gaze else []) + ([f"look at {args.look_at}"] if look_at else [])
+                     + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else []))
+    write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
+    moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0
+    print(f"{out}: {what or 'neutral'}; {len(V)} vertices, largest displacement {moved:.4g} "
+          f"({moved / rig.frame.size:.1%} of the head size), {time.perf_counter() - t:.1f} s")
     return 0
 
 
@@ -323,8 +483,8 @@ def cmd_batch(args):
     return 0 if report["counts"]["failed"] == 0 else 1
 
 
-COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "landmarks": cmd_landmarks, "build-rig": cmd_build_rig,
-            "batch": cmd_batch}
+COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
+            "build-rig": cmd_build_rig, "batch": cmd_batch}
 
 
 def _axis_values(argv):

@@ -1,0 +1,69 @@
+"""Write a posed mesh (vertices and triangles, no rig) as OBJ or GLB, atomically.
+
+Goes beyond the seeds: the output of ``autobones pose``. Vertex *i* of the file is vertex
+*i* of the rig (nothing merged, nothing reordered), in the rig's input frame and units.
+"""
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+
+import numpy as np
+
+from ..errors import AutobonesError
+
+FORMATS = (".obj", ".glb")
+
+
+def write_posed_mesh(path, V, F, comment=None):
+    """Write ``V`` (n, 3) float and ``F`` (m, 3) int to ``path`` (.obj or .glb).
+
+    OBJ: ``v`` lines with 9 significant digits (float32 precision and more), 1-based
+    ``f`` lines. GLB: a static glTF 2.0 mesh (float32 positions, no skin, no normals),
+    through trimesh with processing off. The file is written under a temporary name in
+    the target folder and renamed when complete.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file; its extension picks the format.
+    V : (n, 3) float
+        Vertices, any frame and unit (written as given).
+    F : (m, 3) int
+        Triangles, 0-based indices into ``V``.
+    comment : str, optional
+        One line written as an OBJ comment (ignored for GLB).
+    """
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in FORMATS:
+        raise AutobonesError(f"{path}: the posed mesh is written as .obj or .glb, not {ext or 'no extension'!r}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise AutobonesError(f"{path}: the folder {folder} does not exist")
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if ext == ".obj":
+        buf = io.StringIO()
+        if comment:
+            buf.write("# " + " ".join(str(comment).split()) + "\n")
+        np.savetxt(buf, V, fmt="v %.9g %.9g %.9g")
+        np.savetxt(buf, F + 1, fmt="f %d %d %d")
+        data = buf.getvalue().encode()
+    else:
+        import trimesh
+
+        data = trimesh.Trimesh(V, F, process=False, validate=False).export(file_type="glb")
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + "-", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise AutobonesError(f"{path}: cannot write ({exc.strerror or exc})") from None
+    return path
