@@ -384,6 +384,11 @@ def cmd_pose(args):
 
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
     rig = autobones.load_rig(args.rig)
+    if not rig.extra.get("muscles"):
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
+                             "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
     V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
                  eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]

@@ -22,6 +22,9 @@ Blender's Z-up world; lengths in file units):
   vertices outside the rotated bone's chain (the bone and its descendants), the top of
   the head's displacement against a rigid rotation scaled by its chain weight, and how
   far the whole mesh is from linear blend skinning with Blender's own vertex groups.
+- ``shape_keys`` (files with morph targets, else null): the shape key names Blender made
+  and, per key set to 1 alone, the largest distance between the evaluated mesh's
+  displacement and the file's morph target delta (``max_error``).
 
 Blender's importer may drop vertices no triangle uses and split or merge vertices, so
 Blender vertices are matched to file vertices by nearest position, never by index. The
@@ -105,6 +108,49 @@ def group_weights(obj, names):
             if g.group in col:
                 W[v.index, col[g.group]] = g.weight
     return W
+
+
+def shape_key_report(obj, doc, body, P_file, rest, tree_file):
+    """The file's morph targets as Blender's shape keys: names, and for each key set to 1
+    (alone), how far the evaluated mesh's displacement is from the file's POSITION delta.
+
+    Each Blender vertex is compared with the file vertices at its rest position (within
+    1e-6 of the bounding box diagonal; duplicates may carry different deltas, the closest
+    counts). None when the file has no morph targets.
+    """
+    mesh = doc["meshes"][0]
+    targets = mesh["primitives"][0].get("targets")
+    if not targets:
+        return None
+    file_names = (mesh.get("extras") or {}).get("targetNames") or []
+    keys = obj.data.shape_keys
+    out = {"file_target_names": file_names, "file_weights": mesh.get("weights"),
+           "reference": keys.reference_key.name if keys else None,
+           "names": [k.name for k in keys.key_blocks if k != keys.reference_key] if keys else [],
+           "values": {k.name: float(k.value) for k in keys.key_blocks} if keys else {},
+           "keys": {}}
+    if not keys:
+        return out
+    eps = 1e-6 * float(np.linalg.norm(P_file.max(0) - P_file.min(0)))
+    match = [[j for _, j, _ in tree_file.find_range(p.tolist(), eps)] or [tree_file.find(p.tolist())[1]]
+             for p in rest]
+    for name in out["names"]:
+        if name not in file_names:
+            continue
+        delta = accessor(doc, body, targets[file_names.index(name)]["POSITION"]).astype(np.float64)
+        kb = keys.key_blocks[name]
+        kb.value = 1.0
+        bpy.context.view_layer.update()
+        disp = evaluated_positions(obj) - rest
+        kb.value = 0.0
+        bpy.context.view_layer.update()
+        err = np.array([np.linalg.norm(delta[js] - d, axis=1).min() for d, js in zip(disp, match)])
+        out["keys"][name] = {"max_error": float(err.max()),
+                             "max_file_delta": float(np.linalg.norm(delta, axis=1).max()),
+                             "max_blender_displacement": float(np.linalg.norm(disp, axis=1).max()),
+                             "vertices_moved": int((np.linalg.norm(disp, axis=1) > eps).sum())}
+    out["rest_restored_max_error"] = float(np.linalg.norm(evaluated_positions(obj) - rest, axis=1).max())
+    return out
 
 
 def main(argv):
@@ -221,6 +267,7 @@ def main(argv):
         bpy.context.view_layer.update()
     after = evaluated_positions(obj)
     report["rest_restored_max_error"] = float(np.linalg.norm(after - rest, axis=1).max())
+    report["shape_keys"] = shape_key_report(obj, doc, body, P_file, rest, tree_file)
     with open(report_path, "w") as fh:
         json.dump(report, fh, indent=1)
 
