@@ -110,13 +110,17 @@ class Rig:
 
     def expression_model(self, definitions=None):
         """The :class:`autobones.expressions.ExpressionModel` of this rig (built on first use and
-        kept; needs the muscles of ``transfer``). ``definitions`` None: the ones a loaded rig's
-        sidecar kept (``extra['expressions']['definitions']``), else ``generic_rig/expressions.json``."""
+        kept; needs the muscles of ``transfer``). ``definitions`` (path or dict) builds it again with
+        those; ``pose`` and ``save`` then use it. None: the model already built, else one with the
+        definitions a loaded rig's sidecar kept (``extra['expressions']['definitions']``), else
+        ``generic_rig/expressions.json``."""
         from .expressions import ExpressionModel
 
-        if definitions is None:  # a loaded rig poses with the definitions its sidecar kept
-            definitions = (self.extra.get("expressions") or {}).get("definitions")
         cached = self.__dict__.get("_expression_model")
+        if definitions is None:
+            if cached is not None:
+                return cached
+            definitions = (self.extra.get("expressions") or {}).get("definitions")
         if cached is None or cached.definitions is not definitions:
             cached = ExpressionModel(definitions).fit(self)
             self.__dict__["_expression_model"] = cached
@@ -143,7 +147,7 @@ class Rig:
         from .morph_targets import definitions_digest
 
         model = self.__dict__.get("_expression_model")
-        doc = model.doc_ if model is not None and hasattr(model, "doc_") else load_expressions(
+        doc = model.doc_ if model is not None else load_expressions(
             (self.extra.get("expressions") or {}).get("definitions"))
         aus = doc.get("action_units", {})
         return {"format": doc.get("format"), "sha256": definitions_digest(doc),

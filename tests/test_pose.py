@@ -264,8 +264,9 @@ def test_khronos_validator_accepts_the_morph_targets(saved, name):
     assert info["hasMorphTargets"] and info["hasSkins"] and info["totalVertexCount"] == len(rig.vertices)
 
 
-def test_blender_imports_the_targets_as_shape_keys_that_move_the_skin_as_written(saved, tmp_path):
-    rig, glb = saved("default")
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_blender_imports_the_targets_as_shape_keys_that_move_the_skin_as_written(saved, tmp_path, name):
+    rig, glb = saved(name)
     rep = run_blender_check(glb, tmp_path / "blender.json")
     keys = rep["shape_keys"]
     deltas, _, _ = _targets(glb)
@@ -361,3 +362,25 @@ def test_cli_pose_help_teaches_the_aus_emotions_and_units(tmp_path):
     assert "degrees" in r.stdout and "subject's left" in r.stdout and "--expression" in r.stdout
     r = subprocess.run([exe, "transfer", "--help"], capture_output=True, text=True, timeout=120)
     assert "--expressions" in r.stdout and "morph target" in r.stdout
+
+
+def test_a_rig_with_its_own_definitions_saves_and_loads_with_them(tmp_path):
+    import copy
+
+    from autobones.expressions import ExpressionModel
+
+    doc = copy.deepcopy(DOC)
+    doc["action_units"]["12"]["muscles"] = {"zygomaticus_major": 0.5}
+    doc["expressions"]["grin"] = {"au": {"12": 1.0, "25": 0.5}}
+    rig = autobones.transfer(*HEADS["default"])
+    model = rig.expression_model(doc)
+    assert rig.expression_model() is model  # pose and save use the model built last
+    rig.save(tmp_path / "own.glb", expressions=["12"])
+    deltas, _, _ = _targets(tmp_path / "own.glb")
+    want = ExpressionModel(doc).fit(rig).pose(au={12: 1}) - rig.vertices
+    assert np.abs(deltas["AU12"] - want).max() < 1e-6 * rig.frame.size
+    assert not np.allclose(want, ExpressionModel().fit(rig).pose(au={12: 1}) - rig.vertices)
+    side = json.loads((tmp_path / "own.rig.json").read_text())["expressions"]
+    assert side["definitions"] == doc and side["sha256"] == definitions_digest(doc) != definitions_digest(DOC)
+    again = autobones.load_rig(tmp_path / "own.glb")
+    assert np.abs(again.pose(expression="grin") - rig.pose(expression="grin")).max() < 1e-9 * rig.frame.size
