@@ -463,6 +463,26 @@ class ExpressionModel:
         self.muscle_basis_ *= (1.0 - hold)[None, :, None]
         for i in list(self.crease_basis_):
             self.crease_basis_[i] = self.crease_basis_[i] * (1.0 - hold)[:, None]
+        # small separate parts on the lids (eyelashes, eye-occlusion / tear-line shells): each of
+        # their vertices follows the skin vertex nearest it (its lid joints and muscle fields), so
+        # lashes ride their lid and a shell across the fissure closes with both lids
+        self.attached_ = np.zeros(n, dtype=bool)
+        eye_w = sum((W[:, names.index(f"eye_{s}")] for s in "lr" if f"eye_{s}" in names), np.zeros(n))
+        d_skin, near = tree.query(Vc)
+        near = skin_idx[near]
+        lid_any = self.lid_weights_.max(axis=0)
+        att = float(lid.get("attached_part_size", 0.5)) * fu
+        for p_ in np.unique(part[~skin]):
+            rows = np.flatnonzero((part == p_) & ~skin)
+            if (eye_w[rows].mean() >= 0.5 or np.ptp(Vc[rows], axis=0).max() > att
+                    or d_skin[rows].min() > 0.01 * fu or lid_any[near[rows]].max() < 0.1):
+                continue
+            self.attached_[rows] = True
+        rows = np.flatnonzero(self.attached_)
+        self.lid_weights_[:, rows] = self.lid_weights_[:, near[rows]]
+        self.muscle_basis_[:, rows] = self.muscle_basis_[:, near[rows]]
+        for i in list(self.crease_basis_):
+            self.crease_basis_[i][rows] = self.crease_basis_[i][near[rows]]
 
         # --- jaw weights sharpened across the mouth line -------------------------------------
         Wj = W.copy()

@@ -3,6 +3,7 @@
     python gallery/make_gallery.py            # all pictures into gallery/
     python gallery/make_gallery.py --only ict_neutral
     python gallery/make_gallery.py --only landmarks     # the four landmark previews below
+    python gallery/make_gallery.py --only expressions   # the six emotions on four heads
 
 Each picture is a rig made by ``autobones.place`` right now (no cached data),
 rendered by ``autobones.render`` from the front, three-quarter and side views in
@@ -16,6 +17,11 @@ landmarks found by ``autobones.detect_landmarks`` on three human heads of differ
 kinds (a scan, a sculpt, a statue), drawn by ``autobones.preview`` from the front and
 the side with each name's detection confidence; ``landmarks_given_goat``: the same
 preview of a landmark file placed by hand (no face detector works on a goat).
+
+``expressions_*``: the six emotion prototypes of ``generic_rig/expressions.json``
+(seed 002 Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
+transferred rig, neutral first, all from the front at one scale; the skin is tinted
+orange by how far each vertex moved (relative to the largest motion in the row).
 """
 from __future__ import annotations
 
@@ -66,6 +72,13 @@ TRANSFERS = {  # name: (mesh, landmark file), relative to ../shared/data or the 
     "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
     "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
     "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
+}
+
+EXPRESSION_HEADS = {  # name: (mesh or None for the default head, landmark file)
+    "default_head": (None, "generic_rig/default_head.landmarks.json"),
+    "ict_identity002": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
+    "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
+    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
 }
 
 REGION_COLOURS = np.array([colorsys.hsv_to_rgb((0.07 + i * 0.618034) % 1.0, 0.45, 0.95) for i in range(16)])
@@ -122,15 +135,58 @@ def landmark_picture(name, out):
     print(f"{path}: {len(lm)} landmarks{extra}")
 
 
+def expression_picture(name, out, size=360):
+    """``expressions_<name>.png``: neutral and the six emotions side by side, front view."""
+    from autobones.expressions import ExpressionModel
+
+    mesh, marks = EXPRESSION_HEADS[name]
+    marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+    rig = autobones.transfer(None if mesh is None else DATA / mesh, marks)
+    model = ExpressionModel().fit(rig)
+    emotions = ["neutral"] + list(model.expressions)
+    poses = [rig.vertices if e == "neutral" else model.pose(expression=e) for e in emotions]
+    V0 = rig.frame.to_canonical(rig.vertices)
+    Vs = [rig.frame.to_canonical(P) for P in poses]
+    moved = [np.linalg.norm(P - rig.vertices, axis=1) for P in poses]
+    top = max(float(m.max()) for m in moved) or 1.0
+    step = 1.1 * float(np.ptp(V0[:, 0]))
+    F = np.asarray(rig.faces)
+    Vall, Fall, Call, marks_at = [], [], [], []
+    base = np.array([0.85, 0.85, 0.85])
+    hot = np.array([1.0, 0.45, 0.1])
+    for k, (V, m) in enumerate(zip(Vs, moved)):
+        off = np.array([k * step, 0.0, 0.0])
+        Vall.append(V + off)
+        Fall.append(F + k * len(V))
+        a = np.clip(m / top, 0.0, 1.0)[:, None] ** 0.7
+        Call.append((1 - a) * base + a * hot)
+        marks_at.append(np.array([V0[:, 0].mean(), V0[:, 1].min() - 0.04 * np.ptp(V0[:, 1]), V0[:, 2].max()]) + off)
+    V, F2, C = np.concatenate(Vall), np.concatenate(Fall), np.concatenate(Call)
+    height = float(np.ptp(V0[:, 1])) * 1.12
+    img = render.render_views(V, F2, vertex_colors=C, views=("front",),
+                              size=(int(size * len(emotions) * step / max(height, 1e-12) / 1.1) or size, size),
+                              points=np.array(marks_at), point_labels=emotions, point_color=(60, 60, 60))
+    path = Path(out) / f"expressions_{name}.png"
+    render.save_png(path, img)
+    print(f"{path}: {', '.join(emotions)}; largest motion {top:.3g} (mesh units)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
-                    + LANDMARK_PICTURES + ["landmarks"], help="'landmarks': the four landmark previews")
+                    + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
+                    + ["expressions"],
+                    help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
-    names = args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
-    names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else [n])]
+    expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
+    names = args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES + expression_pictures
+    names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
+                                         expression_pictures if n == "expressions" else [n])]
     for name in names:
+        if name.startswith("expressions_"):
+            expression_picture(name[len("expressions_"):], args.out)
+            continue
         if name.startswith("landmarks_"):
             landmark_picture(name, args.out)
             continue
