@@ -79,6 +79,8 @@ def au_morph_targets(model, which=True):
     for key in target_keys(model.action_units, which):
         delta = model.pose(au={key: 1.0}) - neutral
         name = "AU" + key
+        if not np.isfinite(delta).all():
+            raise AutobonesError(f"morph target {name}: the pose is not finite on this head")
         if not np.any(delta.astype(np.float32)):
             skipped.append(name)
         else:

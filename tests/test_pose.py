@@ -322,6 +322,8 @@ def test_cli_user_story(tmp_path, capsys):
         assert np.abs(V - want).max() < tol, args
     assert sorted(os.listdir(tmp_path)) == ["happy.obj", "head.glb", "head.rig.json", "head.weights.npz",
                                             "smile.obj", "x.glb"]
+    issues = run_validator(tmp_path / "x.glb")["issues"]  # the posed static mesh is valid glTF too
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
 
 
 def test_cli_pose_bad_input_is_one_line_exit_2_nothing_written(saved, rigs, tmp_path, capsys):
