@@ -493,10 +493,14 @@ COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "lan
 
 
 def _axis_values(argv):
-    """argparse reads ``--front -y`` as two options; join such pairs as ``--front=-y``."""
+    """argparse reads ``--front -y`` (or ``--head -10,0,0``) as two options; join such pairs as ``--front=-y``."""
     out, i = [], 0
     while i < len(argv):
-        if argv[i] in ("--up", "--front") and i + 1 < len(argv) and argv[i + 1].lower() in ("-x", "-y", "-z"):
+        if i + 1 < len(argv) and (
+                (argv[i] in ("--up", "--front") and argv[i + 1].lower() in ("-x", "-y", "-z"))
+                # pose's vectors: ``--head -10,0,0`` (argparse takes only plain numbers for negative values)
+                or (argv[i] in ("--gaze", "--look-at", "--head", "--neck", "--jaw") and argv[i + 1][:2] in
+                    {"-" + c for c in "0123456789."})):
             out.append(f"{argv[i]}={argv[i + 1]}")
             i += 2
         else:

@@ -311,7 +311,9 @@ def test_cli_user_story(tmp_path, capsys):
                      (["--au", "12=0.8", "--au", "6=0.4", "--jaw", "10", "-o", "smile.obj"],
                       {"au": {12: 0.8, 6: 0.4}, "jaw_deg": 10}),
                      (["--au", "AU12L", "--gaze", "20,5", "--eyelids", "upper=0.5", "--head", "0,15,0", "-o", "x.glb"],
-                      {"au": {"12L": 1}, "gaze": (20, 5), "eyelids": {"upper": 0.5}, "head_deg": (0, 15, 0)})):
+                      {"au": {"12L": 1}, "gaze": (20, 5), "eyelids": {"upper": 0.5}, "head_deg": (0, 15, 0)}),
+                     (["--expression", "sadness=0.5", "--head", "-10,0,0", "--gaze", "-20,-5", "-o", "neg.obj"],
+                      {"expression": {"sadness": 0.5}, "head_deg": (-10, 0, 0), "gaze": (-20, -5)})):
         code, out, err = _cli(["pose", "head.glb", *args], tmp_path, capsys)
         assert code == 0 and not err, err
         assert len(out.strip().splitlines()) == 1 and out.startswith(args[-1] + ":")
@@ -321,7 +323,7 @@ def test_cli_user_story(tmp_path, capsys):
         tol = 1e-6 * rig.frame.size if args[-1].endswith(".glb") else 1e-8 * rig.frame.size
         assert np.abs(V - want).max() < tol, args
     assert sorted(os.listdir(tmp_path)) == ["happy.obj", "head.glb", "head.rig.json", "head.weights.npz",
-                                            "smile.obj", "x.glb"]
+                                            "neg.obj", "smile.obj", "x.glb"]
     issues = run_validator(tmp_path / "x.glb")["issues"]  # the posed static mesh is valid glTF too
     assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
 
