@@ -434,7 +434,8 @@ class ExpressionModel:
             s_f = Vc[:, 1] - y_f
             a = float(lid["width_margin"]) * 0.5 * abs(ex[0] - en[0])
             cx = 0.5 * (ex[0] + en[0])
-            front = _ramp(Vc[:, 2], c[2] - 0.02 * fu, c[2] + 0.04 * fu)
+            depth = float(lid.get("depth", 0.02)) * fu
+            front = _ramp(Vc[:, 2], c[2] - depth, c[2] + 0.04 * fu)
             ru = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["upper_height"]) * fu)) ** 2)
             rl = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["lower_height"]) * fu)) ** 2)
             is_open = mid_gap[e] > 0.25 * gap
