@@ -51,17 +51,22 @@ STATUSES = ("ok", "failed", "skipped")
 # ---------------------------------------------------------------------------------------------
 # options and naming
 
-def make_options(transfer=False, density="medium", rig=None, random_state=0):
+def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False):
     """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
 
     ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
-    options mean the same thing on every worker.
+    options mean the same thing on every worker. ``expressions`` (transfer only: True or
+    ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
+    when set, so other batches keep their options hash.
     """
     from .facial import DENSITIES, bone_count
 
     if transfer:
         return {"mode": "transfer", "density": None,
-                "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None}
+                "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
+                **({"expressions": expressions} if expressions else {})}
+    if expressions:
+        raise AutobonesError("--expressions needs muscles, which place does not make; add --transfer")
     if rig is not None:
         raise AutobonesError("--rig is only used with --transfer")
     n = bone_count(density)  # refuse a bad density once, before any file is touched
@@ -138,7 +143,7 @@ def rig_one(input_path, output_path, options):
         with _one_blas_thread():
             rig = _make_rig(input_path, options, record)
         rig.extra = {**rig.extra, "batch": {"options": options, "options_hash": h}}
-        _save_atomically(rig, output_path, partial)
+        _save_atomically(rig, output_path, partial, options.get("expressions", False))
         record.update(status="ok", timings={k: round(float(v), 4) for k, v in rig.timings.items()},
                       vertices=int(len(rig.vertices)), bones=int(len(rig.skeleton)))
     except AutobonesError as exc:
@@ -183,7 +188,7 @@ class _one_blas_thread:
         return False
 
 
-def _save_atomically(rig, output_path, partial):
+def _save_atomically(rig, output_path, partial, expressions=False):
     """Save into ``partial``, then rename glb, npz and last the sidecar (the commit mark) into place."""
     folder = os.path.dirname(os.path.abspath(output_path))
     try:
@@ -193,7 +198,7 @@ def _save_atomically(rig, output_path, partial):
         os.mkdir(partial)
     except OSError as exc:
         raise AutobonesError(f"{output_path}: cannot create the output folder ({exc.strerror or exc})") from exc
-    staged = rig.save(os.path.join(partial, os.path.basename(output_path)))
+    staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions)
     glb, js, npz = output_paths(output_path)
     try:
         for src, dst in ((staged[0], glb), (staged[2], npz), (staged[1], js)):

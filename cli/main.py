@@ -256,6 +256,10 @@ def build_parser():
                         "(or NAME.pp, .pts, .ljson) beside each NAME.obj, else finds them automatically "
                         "(human faces; needs autobones[landmarks])")
     a.add_argument("--rig", metavar="DIR", help="generic rig folder for --transfer (default: the built-in one)")
+    a.add_argument("--expressions", action="store_true",
+                   help="with --transfer: one morph target per FACS action unit in each glb (see `autobones pose --help`)")
+    a.add_argument("--expression-sides", action="store_true",
+                   help="with --transfer: also each AU's left and right halves (AU12L, AU12R); implies --expressions")
     a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
     a.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "
@@ -448,7 +452,8 @@ def cmd_build_rig(args):
 def cmd_batch(args):
     from autobones.batch import make_options, run_batch, summary_table
 
-    options = make_options(transfer=args.transfer, density=args.density, rig=args.rig)
+    options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
+                           expressions="sides" if args.expression_sides else args.expressions)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
 

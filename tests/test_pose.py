@@ -388,3 +388,26 @@ def test_a_rig_with_its_own_definitions_saves_and_loads_with_them(tmp_path):
     assert side["definitions"] == doc and side["sha256"] == definitions_digest(doc) != definitions_digest(DOC)
     again = autobones.load_rig(tmp_path / "own.glb")
     assert np.abs(again.pose(expression="grin") - rig.pose(expression="grin")).max() < 1e-9 * rig.frame.size
+
+
+def test_batch_transfer_with_expressions_and_its_options_hash(tmp_path, capsys):
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(ROOT / "generic_rig" / "default_head.obj", src / "a.obj")
+    shutil.copy(HEADS["default"][1], src / "a.landmarks.json")
+    out = tmp_path / "out"
+    code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--expressions", "-q"], tmp_path, capsys)
+    assert code == 0, err
+    assert len(_targets(out / "a.glb")[0]) == len(AUS)
+    report = json.loads((out / "batch_report.json").read_text())
+    assert report["options"]["expressions"] is True
+    code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--expressions", "-q"], tmp_path, capsys)
+    assert code == 0 and json.loads((out / "batch_report.json").read_text())["counts"]["skipped"] == 1
+    # the same batch without morph targets is other options: refused without --force, done with it
+    code, _, err = _cli(["batch", src, "-o", out, "--transfer", "-q"], tmp_path, capsys)
+    assert code == 1 and "a.obj" in err
+    code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--force", "-q"], tmp_path, capsys)
+    assert code == 0, err
+    assert "targets" not in read_glb(out / "a.glb")[0]["meshes"][0]["primitives"][0]
+    code, _, err = _cli(["batch", src, "-o", tmp_path / "p", "--expressions"], tmp_path, capsys)
+    assert code == 2 and "add --transfer" in err and not (tmp_path / "p").exists()
