@@ -43,7 +43,10 @@ def load_rig(path):
         as float32), ``labels``, ``facial_mask``, ``frame``, ``options``, ``fields`` and
         ``extra`` (muscles, landmarks, expression definitions...). ``rig.pose(...)`` works
         when the rig has muscles (``transfer``); the model is fitted again on first use
-        (about a second on a 27k-vertex head) with the definitions the sidecar kept.
+        (about a second on a 27k-vertex head) with the definitions the sidecar kept
+        (``rig.expression_model(other)`` to use others). The sidecar pins the numbers, not
+        the code: a newer autobones poses with its own model code and the saved numbers
+        (a parameter they lack takes the code's default).
         ``segmentation`` and ``timings`` are not saved (None, {}).
 
     Raises
@@ -88,6 +91,13 @@ def load_rig(path):
         fr = meta["frame"]
         frame = Frame(np.asarray(fr["rotation"], dtype=np.float64), np.asarray(fr["origin"], dtype=np.float64),
                       float(fr["head_size"]), float(fr.get("symmetry_error", float("nan"))))
+        defs = (meta.get("expressions") or {}).get("definitions")
+        if defs is not None:
+            if not isinstance(defs, dict):
+                raise ValueError("expressions.definitions is not an object")
+            for key in ("model", "muscle_types", "action_units", "expressions"):
+                if not isinstance(defs.get(key), dict):
+                    raise ValueError(f"expressions.definitions has no {key!r}")
         labels = np.asarray(meta["labels"], dtype=np.int8)
         mask = np.zeros(n, dtype=bool)
         mask[np.asarray(meta.get("facial_mask", []), dtype=np.int64)] = True

@@ -122,7 +122,8 @@ examples:
   autobones pose head.glb --eyelids upper=1 --head 0,30,0 -o turned.obj
 
 RIG.glb is a rig saved by `autobones transfer` (its muscles drive the skin), with
-RIG.rig.json and RIG.weights.npz beside it. The posed vertices are written in the
+RIG.rig.json and RIG.weights.npz beside it; the sidecar keeps the expression
+definitions the rig was saved with (--definitions FILE poses with others). The posed vertices are written in the
 rig's own frame and units, vertex i of the output = vertex i of the input mesh:
 OUT.obj (v and f lines) or OUT.glb (a static mesh, no skin).
 
@@ -211,6 +212,9 @@ def build_parser():
     q.add_argument("--look-at", metavar="X,Y,Z", help="a point (rig frame and units) both eyes aim at")
     q.add_argument("--head", dest="head_deg", metavar="PITCH,YAW,ROLL", help="head rotation, degrees")
     q.add_argument("--neck", dest="neck_deg", metavar="PITCH,YAW,ROLL", help="neck rotation, degrees")
+    q.add_argument("--definitions", metavar="FILE",
+                   help="expression definitions to pose with (format of generic_rig/expressions.json) instead "
+                        "of the ones the rig's sidecar kept")
     _common(q)
 
     m = sub.add_parser(
@@ -393,6 +397,8 @@ def cmd_pose(args):
 
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
+    if args.definitions:
+        rig.expression_model(args.definitions)  # pose uses the model built last
     V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
                  eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]

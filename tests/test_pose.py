@@ -170,6 +170,11 @@ def test_load_rig_refuses_what_it_cannot_pose(saved, tmp_path):
     shutil.copy(sidecar_paths(ict_glb)[1], tmp_path / "mixed.weights.npz")
     cases[f] = "do not belong together"
     cases[tmp_path / "absent.glb"] = "no such file"
+    f = _copy_rig(glb, tmp_path, "baddefs")
+    side = json.loads((tmp_path / "baddefs.rig.json").read_text())
+    del side["expressions"]["definitions"]["action_units"]
+    (tmp_path / "baddefs.rig.json").write_text(json.dumps(side))
+    cases[f] = "expressions.definitions has no 'action_units'"
     for path, expect in cases.items():
         with pytest.raises(AutobonesError) as err:
             autobones.load_rig(path)
@@ -411,3 +416,22 @@ def test_batch_transfer_with_expressions_and_its_options_hash(tmp_path, capsys):
     assert "targets" not in read_glb(out / "a.glb")[0]["meshes"][0]["primitives"][0]
     code, _, err = _cli(["batch", src, "-o", tmp_path / "p", "--expressions"], tmp_path, capsys)
     assert code == 2 and "add --transfer" in err and not (tmp_path / "p").exists()
+
+
+def test_cli_pose_with_other_definitions(saved, tmp_path, capsys):
+    import copy
+
+    rig, glb = saved("default")
+    _copy_rig(glb, tmp_path, "head")
+    doc = copy.deepcopy(DOC)
+    doc["action_units"]["12"]["muscles"] = {k: 2 * v for k, v in DOC["action_units"]["12"]["muscles"].items()}
+    (tmp_path / "mine.json").write_text(json.dumps(doc))
+    code, out, err = _cli(["pose", "head.glb", "--au", "12=0.5", "--definitions", "mine.json", "-o", "a.obj"],
+                          tmp_path, capsys)
+    assert code == 0, err
+    V, _ = autobones.load_mesh(tmp_path / "a.obj")
+    assert np.abs(V - rig.pose(au={12: 1})).max() < 1e-8 * rig.frame.size
+    (tmp_path / "broken.json").write_text("{")
+    code, out, err = _cli(["pose", "head.glb", "--definitions", "broken.json", "-o", "b.obj"], tmp_path, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "broken.json" in err
+    assert not (tmp_path / "b.obj").exists()
