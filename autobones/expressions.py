@@ -230,6 +230,13 @@ class ExpressionModel:
 
         E0 = np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]])
         A0 = sp.csr_matrix((np.ones(2 * len(E0)), (np.r_[E0[:, 0], E0[:, 1]], np.r_[E0[:, 1], E0[:, 0]])), shape=(nw, nw))
+        skin_w = np.zeros(nw, dtype=bool)
+        skin_w[index[skin]] = True
+        Fs = Fw[skin_w[Fw].all(axis=1)]
+        a_s = 0.5 * np.linalg.norm(np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]]), axis=1)
+        Fs = Fs[a_s > 1e-9 * max(float(np.median(a_s)) if len(a_s) else 0.0, 1e-300)]
+        self._unfold_mesh = (A0.tocsr(), np.asarray(A0.sum(axis=1)).ravel(), skin_w, Fs,
+                             np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]]))
         Ns = Nw.copy()
         for _ in range(int(model.get("skull_smoothing_passes", 10))):
             Ns = A0 @ Ns + Ns
@@ -721,13 +728,66 @@ class ExpressionModel:
             for i, K in self.crease_basis_.items():
                 if c[i] != 0:
                     d += c[i] * K
-        return self.vertices_ + (self._bones(d, jaw_deg, eyelids, gaze, look_at, head_deg, neck_deg)
+        return self.vertices_ + (self._bones(d, jaw_deg, eyelids, gaze, look_at, head_deg, neck_deg, unfold=True)
                                  * self.frame_.size) @ self.frame_.rotation
 
-    def _bones(self, d, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None, neck_deg=None):
+    def _unfold(self, d, rounds=40, passes=8):
+        """Relax the canonical displacement ``d`` (n, 3) where skin triangles turned over.
+
+        Beyond the seeds: a wide jaw opening turns each vertex by its own angle, and where the
+        jaw weight changes fast (under the chin, the mouth corners) neighbouring skin can swing
+        past each other. Skin cannot fold through itself, so around every skin triangle whose
+        normal turned by more than 90 degrees (and the two rings of vertices about it) the
+        displacement is replaced by its neighbours' mean (Jacobi passes, the ring outside held),
+        the region growing until nothing is turned over, ``rounds`` run out or eight rounds in
+        a row bring no fewer folds; the state with the fewest folds is kept (never more than
+        before). Vertices away from folds keep their displacement exactly.
+        """
+        A, deg, skin_w, Fs, n0 = self._unfold_mesh
+        index, first = self._weld
+        Vw = self.canonical_[first]
+        dw = d[first].copy()
+        touched = np.zeros(len(Vw), dtype=bool)
+        grow = np.zeros(len(Vw), dtype=bool)
+        faces = np.arange(len(Fs))                # faces whose vertices may have moved
+        last, stale = None, 0
+        for _ in range(rounds):
+            P = Vw + dw
+            Fq = Fs[faces]
+            n1 = np.cross(P[Fq[:, 1]] - P[Fq[:, 0]], P[Fq[:, 2]] - P[Fq[:, 0]])
+            bad = faces[(n0[faces] * n1).sum(axis=1) <= 0]
+            if last is None or len(bad) < last:     # keep the state with the fewest folds
+                best, best_touched = dw.copy(), touched.copy()
+            if not len(bad):
+                break
+            # stop when relaxing no longer helps (a fold the mean cannot undo)
+            stale = stale + 1 if last is not None and len(bad) >= last else 0
+            last = len(bad) if last is None else min(last, len(bad))
+            if stale >= 8:
+                break
+            grow[Fs[bad].ravel()] = True
+            for _ring in range(2):
+                grow |= (A @ grow.astype(np.float64)) > 0
+            grow &= skin_w
+            touched |= grow
+            rows = np.flatnonzero(grow)
+            faces = np.flatnonzero(grow[Fs].any(axis=1))
+            Ar = A[rows]
+            for _p in range(passes):
+                dw[rows] = (Ar @ dw) / np.maximum(deg[rows], 1.0)[:, None]
+        if not best_touched.any():
+            return d
+        out = d.copy()
+        moved = best_touched[index]
+        out[moved] = best[index[moved]]
+        return out
+
+    def _bones(self, d, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None, neck_deg=None,
+               unfold=False):
         """Stage 4 on the canonical (n, 3) muscle-stage displacement ``d``: the lids, jaw, head,
         neck and eyes. Returns the canonical displacement (n, 3), head sizes. For fixed bone
-        parameters it is affine in ``d`` per vertex (a rotation plus a translation)."""
+        parameters and ``unfold`` False it is affine in ``d`` per vertex (a rotation plus a
+        translation); ``unfold`` relaxes skin the lids and jaw fold over (:meth:`_unfold`)."""
         Vc = self.canonical_
         d = np.array(d, dtype=np.float64)
         # eyelids: four lid joints rotating about the eye pivots (canonical +X axis)
@@ -764,6 +824,8 @@ class ExpressionModel:
             glide = self.jaw_glide_ * float(jaw_deg)
             if np.any(glide):
                 d[rows] += W[rows, j, None] * glide[None, :]
+        if unfold and (jaw_deg or np.any(lids)):
+            d = self._unfold(d)
         R = self._bone_transforms(0.0, gaze, look_at, head_deg, neck_deg)
         if R:
             P = Vc + d
