@@ -27,12 +27,21 @@ influence fields, regions, skeleton and skin weights, landmarks):
    weight sharpened across the mouth line (so the jaw opens the lower lip only)
    and spread under the chin (so the skin there stretches); head and neck
    rotations blend by the rig's skin weights (linear blend skinning); eyeballs
-   gaze through their eye bones (yaw/pitch, or an aim point).
+   gaze through their eye bones (yaw/pitch, or an aim point). Separate small parts on
+   the lids (eyelashes, eye-occlusion shells) follow the skin vertex nearest them;
+   the mouth's separate inner parts (teeth, gums, tongue) ride the jaw below the
+   occlusal plane (level through the stomion) and the skull above it, teeth whole.
+5. unfolding (beyond the seeds): skin triangles the lids or jaw turn over are relaxed
+   (the displacement replaced by its neighbours' mean, locally, keeping the state with
+   the fewest folds).
 
 Stages 1 and 3 are linear in the contractions (``muscle_basis_``), stage 2 is a
 clamp that only acts where the skin would sink into the skull, stage 4 is a
-rotation per vertex: a fit can search the contraction vector, jaw angle and lid
-amounts directly (:meth:`ExpressionModel.pose_parameters`).
+rotation per vertex, stage 5 acts only where triangles turn over: a fit can search
+the contraction vector, jaw angle and lid amounts directly
+(:meth:`ExpressionModel.pose_parameters`), and for fixed jaw and lids the pose is an
+affine map of the contractions away from the clamp and folds
+(:meth:`ExpressionModel.linear_pose`).
 
 What the model needs comes through ``transfer`` and is saved with the rig: the
 skeleton and skin weights, ``rig.extra['muscles']`` (origins, insertions,
@@ -494,6 +503,7 @@ class ExpressionModel:
 
         # --- jaw weights sharpened across the mouth line -------------------------------------
         Wj = W.copy()
+        self.mouth_parts_ = np.zeros(0, dtype=np.int64)   # vertices of the mouth's inner parts
         if "jaw" in names:
             j = names.index("jaw")
             # under the chin the jaw swings toward the neck: spread its weight there so the skin
@@ -522,6 +532,28 @@ class ExpressionModel:
                 h = names.index("head")
                 Wj[:, h] += np.where(rest > 1e-12, 0.0, want)
             Wj[:, j] = jaw_new
+            # the mouth's separate inner parts (teeth, gums, tongue) are carried by the mandible
+            # below the occlusal plane and by the skull above it (taken level through the
+            # stomion): a small part (a tooth) rides one bone by its centre, a large one (gums
+            # with the tongue) splits vertex by vertex over a narrow band
+            mouth = model.get("mouth_parts", {})
+            reach = float(mouth.get("reach", 0.9)) * fu
+            band = float(mouth.get("band", 0.03)) * fu
+            rigid = float(mouth.get("rigid_size", 0.5)) * fu
+            eye_w = sum((W[:, names.index(f"eye_{s_}")] for s_ in "lr" if f"eye_{s_}" in names), np.zeros(n))
+            inner = ~skin & ~self.attached_ & (eye_w < 0.5)
+            for p_ in np.unique(part[inner]):
+                rows = np.flatnonzero((part == p_) & inner)
+                cen = Vc[rows].mean(axis=0)
+                if np.linalg.norm(cen - st) > reach or cen[2] > st[2]:
+                    continue
+                y = Vc[rows, 1] - st[1] if np.ptp(Vc[rows], axis=0).max() > rigid else np.full(len(rows), cen[1] - st[1])
+                jw = _ramp(y, band, -band)
+                Wj[rows] = 0.0
+                Wj[rows, j] = jw
+                if "head" in names:
+                    Wj[rows, names.index("head")] = 1.0 - jw
+                self.mouth_parts_ = np.union1d(self.mouth_parts_, rows)
         self.jaw_weights_ = Wj
         down, forward = (list(model.get("jaw_glide", [0.0, 0.0])) + [0.0, 0.0])[:2]
         self.jaw_glide_ = np.array([0.0, -float(down), float(forward)]) * fu
@@ -739,7 +771,8 @@ class ExpressionModel:
         past each other. Skin cannot fold through itself, so around every skin triangle whose
         normal turned by more than 90 degrees (and the two rings of vertices about it) the
         displacement is replaced by its neighbours' mean (Jacobi passes, the ring outside held),
-        the region growing until nothing is turned over, ``rounds`` run out or eight rounds in
+        the region growing (never farther than ``unfold_reach`` fu from the first folds) until
+        nothing is turned over, ``rounds`` run out or eight rounds in
         a row bring no fewer folds; the state with the fewest folds is kept (never more than
         before). Vertices away from folds keep their displacement exactly.
         """
@@ -750,7 +783,8 @@ class ExpressionModel:
         touched = np.zeros(len(Vw), dtype=bool)
         grow = np.zeros(len(Vw), dtype=bool)
         faces = np.arange(len(Fs))                # faces whose vertices may have moved
-        last, stale = None, 0
+        last, stale, allowed = None, 0, None
+        reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
         for _ in range(rounds):
             P = Vw + dw
             Fq = Fs[faces]
@@ -766,9 +800,13 @@ class ExpressionModel:
             if stale >= 8:
                 break
             grow[Fs[bad].ravel()] = True
+            if allowed is None:   # the relaxation stays within ``reach`` of the first folds
+                seeds = np.unique(Fs[bad].ravel())
+                near = cKDTree(Vw[seeds]).query(Vw, distance_upper_bound=reach)[0]
+                allowed = np.isfinite(near) & skin_w
             for _ring in range(2):
                 grow |= (A @ grow.astype(np.float64)) > 0
-            grow &= skin_w
+            grow &= allowed
             touched |= grow
             rows = np.flatnonzero(grow)
             faces = np.flatnonzero(grow[Fs].any(axis=1))
