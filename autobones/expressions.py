@@ -398,6 +398,16 @@ class ExpressionModel:
         # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
         # surfaces face each other) nor under skin whose normal points into the head
         self.clamp_ = (zone < 0.05) & ~inward
+        # muscles over bone (type option "slide"): where the skull lies close under outward skin
+        # (soft tissue at most ``slide_thickness`` fu) the skin slides over it, so the part of
+        # the field along the skull normal (toward a deep origin) is dropped
+        over_bone = self.clamp_ * _ramp(self.thickness_, 1.5 * float(model.get("slide_thickness", 0.04)) * fu,
+                                        float(model.get("slide_thickness", 0.04)) * fu)
+        Ns_ = self.skull_normals_
+        for i, ty in enumerate(mj.types):
+            if bool(types.get(ty, {}).get("slide", False)):
+                G_i = self.muscle_basis_[i]
+                G_i -= (over_bone * (G_i * Ns_).sum(axis=1))[:, None] * Ns_
 
         # --- creases ---------------------------------------------------------------------------
         cr = model["creases"]
