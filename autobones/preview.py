@@ -6,11 +6,11 @@ file. Landmarks on the side of the head turned away from a view are drawn as rin
 from __future__ import annotations
 
 import os
-import tempfile
 
 import numpy as np
 
 from .errors import AutobonesError
+from .io.atomic import temp_beside
 from .orient import detect_frame, frame_from_landmarks
 from .detect import face_camera
 from .render import draw_points, rasterize, save_png, shade
@@ -99,7 +99,7 @@ def save_preview(path, V, F, landmarks, **kwargs):
     if not os.path.isdir(folder):
         raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
     image = landmark_preview(V, F, landmarks, **kwargs)
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + "-", suffix=".png", dir=folder)
+    fd, tmp = temp_beside(path, suffix=".png")
     os.close(fd)
     try:
         save_png(tmp, image)

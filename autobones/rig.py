@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import AutobonesError
+from .io.atomic import temp_beside
 from .io.gltf import write_glb
 from .segment import LABEL_NAMES
 from .skeleton import Skeleton
@@ -196,7 +196,7 @@ class Rig:
         temps = []
         try:
             for target in targets:
-                fd, tmp = tempfile.mkstemp(prefix=".autobones-", suffix=os.path.splitext(target)[1], dir=folder)
+                fd, tmp = temp_beside(target, suffix=os.path.splitext(target)[1])
                 os.close(fd)
                 temps.append(tmp)
             write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,

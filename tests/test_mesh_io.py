@@ -80,3 +80,27 @@ def test_bad_files_raise_one_clear_error(tmp_path, name):
 def test_missing_file():
     with pytest.raises(AutobonesError, match="no such file"):
         load_mesh("/nonexistent/head.obj")
+
+
+def test_outputs_are_not_owner_only(tmp_path):
+    """Outputs are written to a temporary file and renamed; they get the usual mode under the
+    umask (mkstemp alone would leave them readable by their owner only)."""
+    import os
+    import stat
+
+    import autobones
+    from autobones.io.landmarks import read_landmarks, write_landmarks
+    from autobones.preview import save_preview
+    from generic_rig import default_head_path
+
+    old = os.umask(0o022)
+    try:
+        rig = autobones.place(density="sparse")
+        written = rig.save(tmp_path / "head.glb")
+        lm = read_landmarks(os.path.join(os.path.dirname(default_head_path()), "default_head.landmarks.json"))
+        write_landmarks(tmp_path / "head.landmarks.json", lm)
+        save_preview(tmp_path / "head.png", rig.vertices, rig.faces, lm)
+    finally:
+        os.umask(old)
+    for f in [*written, tmp_path / "head.landmarks.json", tmp_path / "head.png"]:
+        assert stat.S_IMODE(os.stat(f).st_mode) == 0o644, f

@@ -7,6 +7,26 @@ import tempfile
 from ..errors import AutobonesError
 
 
+def _default_mode():
+    # a new file's usual mode under the process umask (mkstemp makes its files owner-only)
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def temp_beside(path, suffix=".tmp"):
+    """A new empty temporary file in ``path``'s folder, to be renamed onto ``path``.
+
+    Returns ``(fd, tmp)`` like :func:`tempfile.mkstemp`, but the file has the mode a file
+    created normally would have (readable by group and others under the usual umask), so
+    the renamed output is not owner-only.
+    """
+    folder = os.path.dirname(os.path.abspath(os.fspath(path)))
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(os.fspath(path)) + "-", suffix=suffix, dir=folder)
+    os.fchmod(fd, _default_mode())
+    return fd, tmp
+
+
 def write_text_atomic(path, text, what="file"):
     """Write ``text`` to a temporary file beside ``path``, then rename it into place.
 
@@ -23,7 +43,7 @@ def write_text_atomic(path, text, what="file"):
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + "-", suffix=".tmp", dir=folder)
+    fd, tmp = temp_beside(path)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)

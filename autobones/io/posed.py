@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
 
 import numpy as np
 
 from ..errors import AutobonesError
+from .atomic import temp_beside
 
 FORMATS = (".obj", ".glb")
 
@@ -55,7 +55,7 @@ def write_posed_mesh(path, V, F, comment=None):
         import trimesh
 
         data = trimesh.Trimesh(V, F, process=False, validate=False).export(file_type="glb")
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + "-", suffix=".tmp", dir=folder)
+    fd, tmp = temp_beside(path)
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
