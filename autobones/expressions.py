@@ -472,7 +472,11 @@ class ExpressionModel:
             # the fissure opens as 1 - u^2 between the corners, so the lid joints turn less there
             u = (Vc[:, 0] - cx) / (0.5 * abs(ex[0] - en[0]))
             h = np.clip(1.0 - u * u, 0.0, 1.0) ** float(lid.get("corner_exponent", 1.0))
-            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin * h
+            # above the margin the upper lid turns as one sheet: the corners hold the margin only,
+            # so their hold fades over ``corner_release`` fissure heights up the lid
+            rel = float(lid.get("corner_release", 0.0))
+            h_up = 1.0 - (1.0 - h) * (1.0 - _ramp(s_f, 0.0, rel * gap)) if rel > 0 else h
+            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin * h_up
             self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin * h
             phi = lambda p: np.arctan2(p[1] - c[1], p[2] - c[2])  # noqa: E731
             self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
