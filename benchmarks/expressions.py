@@ -1,10 +1,26 @@
-"""Can the placed bones express a face?  Issue #4, part 3 of its proof: "bones alone".
+"""Can the rig express a face?  Issue #4's proof: the full expression rig's fit (1) and
+transfer (2), and the placed bones alone (3).
 
 Run by hand, not by the tests::
 
-    python benchmarks/expressions.py            # all rigs, all expressions (~30 s)
-    python benchmarks/expressions.py --quick    # sparse and dense only, no rigid variant
+    python benchmarks/expressions.py            # everything (~4 min on 2 cores)
+    python benchmarks/expressions.py --part rig # parts 1 and 2 only (~95 s)
+    python benchmarks/expressions.py --part rig --refine 0   # no nonlinear refinement
+    python benchmarks/expressions.py --quick    # bones: sparse and dense only, no rigid variant
     python benchmarks/expressions.py --sweeps 60  # more rigid block-descent sweeps
+
+Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
+landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
+jaw and lids with bounded linear least squares over the 26 contractions, then
+``scipy.optimize.least_squares`` on the full nonlinear pose), on all vertices and
+on the skin only; the same parameters applied to identity000 and identity001,
+with the baselines neutral, copy by vertex index (100 % by construction: ICT's
+identities share one displacement per expression) and copy through the
+transfer's dense correspondence (``copy_through``). Scores per vertex set: all,
+skin (``model.skin_``), parts (the rest) and the skin regions of the transferred
+``region`` field (``REGIONS``).
+
+Part 3, bones alone, follows.
 
 Data: ICT-FaceKit (``../shared/data/ict``), a linear model whose neutral head
 ``generic_neutral_mesh.obj`` and four real expression shapes (``jawOpen``,
