@@ -529,6 +529,13 @@ class ExpressionModel:
                      if spread > 0 else W[:, j])
             below = _ramp(s_mouth, 0.0, -0.1 * fu) * skin
             jaw_b = (1.0 - below) * W[:, j] + below * jaw_s
+            # beside the mouth the cheek is one sheet from the cheekbone to the mandible: lateral of
+            # the mouth corners it stretches as the jaw opens, the jaw weight diffusing up into it
+            cheek = float(model.get("cheek_spread", 0.0)) * fu
+            if cheek > 0:
+                jaw_c = np.clip(_diffuse(W[first, j], *self._laplacian, t=cheek ** 2), 0.0, 1.0)[index]
+                lateral = _ramp(dx, 0.8 * hw, 1.1 * hw) * skin * (1.0 - below)
+                jaw_b = np.where(lateral > 0, np.maximum(jaw_b, lateral * jaw_c + (1.0 - lateral) * jaw_b), jaw_b)
             # under the chin the opening jaw swings back toward the neck: the skin there follows it
             # less and less from the menton back, so it stretches instead of folding into the neck
             men = L.get("menton")
