@@ -286,7 +286,8 @@ def fit_rig(model, X, sel, refine=30):
     Stage 1 (variable projection on a grid): for a jaw angle and lid amounts the pose is affine in
     the 26 contractions (skull clamp aside), solved by bounded linear least squares; the jaw is
     searched on a 2-degree grid (lids 0), then each of the 4 lids on a 0.1 grid in turn (the
-    others held), then the jaw again on a 0.5-degree grid around its best.
+    others held); a second such sweep (the jaw grid again with those lids, the lids again),
+    then the jaw on a 0.5-degree grid around its best.
     Stage 2: ``scipy.optimize.least_squares`` (trf, finite differences, ``refine`` evaluations
     at most) over all 31 parameters of the full nonlinear pose (``pose_parameters``, skull clamp
     included), from stage 1, within the same bounds. Returns (contractions, jaw, lids, info).
@@ -295,15 +296,16 @@ def fit_rig(model, X, sel, refine=30):
 
     lo, hi = contraction_bounds(model)
     lids = np.zeros(4)
-    best = min((( _solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in JAW_GRID))
-    jaw = best[1]
-    for q in range(4):
-        trials = []
-        for a in LID_GRID:
-            l2 = lids.copy()
-            l2[q] = a
-            trials.append((_solve_linear(model, X, sel, jaw, l2, lo, hi)[1], a))
-        lids[q] = min(trials)[1]
+    jaw = 0.0
+    for sweep in range(2):
+        jaw = min((_solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in JAW_GRID)[1]
+        for q in range(4):
+            trials = []
+            for a in LID_GRID:
+                l2 = lids.copy()
+                l2[q] = a
+                trials.append((_solve_linear(model, X, sel, jaw, l2, lo, hi)[1], a))
+            lids[q] = min(trials)[1]
     fine = np.clip(jaw + np.arange(-2.0, 2.01, 0.5), *JAW_BOUNDS)
     jaw = min((_solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in fine)[1]
     c, _ = _solve_linear(model, X, sel, jaw, lids, lo, hi)
