@@ -10,7 +10,7 @@ import os
 import numpy as np
 
 from .errors import AutobonesError
-from .io.atomic import temp_beside
+from .io.atomic import output_folder
 from .orient import detect_frame, frame_from_landmarks
 from .detect import face_camera
 from .render import draw_points, rasterize, save_png, shade
@@ -95,16 +95,6 @@ def save_preview(path, V, F, landmarks, **kwargs):
     path = os.fspath(path)
     if not path.lower().endswith(".png"):
         raise AutobonesError(f"{path}: the preview must be a .png file")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
-    image = landmark_preview(V, F, landmarks, **kwargs)
-    fd, tmp = temp_beside(path, suffix=".png")
-    os.close(fd)
-    try:
-        save_png(tmp, image)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    output_folder(path)
+    save_png(path, landmark_preview(V, F, landmarks, **kwargs))
     return path

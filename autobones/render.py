@@ -646,20 +646,27 @@ def draw_segments(image, p0, p1, color=(0, 90, 255), width=2):
     return np.asarray(pil).copy()
 
 
-def save_png(path, image):
-    """Write an (H, W, 3) or (H, W, 4) uint8 RGB(A) or (H, W) uint8 grey image as PNG."""
+def encode_png(image):
+    """PNG file bytes of an (H, W, 3) or (H, W, 4) uint8 RGB(A) or (H, W) uint8 grey image."""
+    import io
+
     from PIL import Image
 
     image = np.asarray(image)
     ok = image.dtype == np.uint8 and (image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (3, 4)))
     if not ok:
         raise AutobonesError(
-            f"save_png({path!s}): image must be uint8 (H, W), (H, W, 3) or (H, W, 4), "
-            f"got {image.dtype} {image.shape}")
-    try:
-        Image.fromarray(image).save(str(path), format="PNG")
-    except OSError as e:
-        raise AutobonesError(f"cannot write {path}: {e}") from e
+            f"PNG image must be uint8 (H, W), (H, W, 3) or (H, W, 4), got {image.dtype} {image.shape}")
+    buf = io.BytesIO()
+    Image.fromarray(image).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def save_png(path, image):
+    """Write :func:`encode_png` of ``image`` to ``path``, atomically."""
+    from .io.atomic import write_bytes_atomic
+
+    return write_bytes_atomic(path, encode_png(image), "the picture")
 
 
 def _view(v):

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import AutobonesError
-from .io.atomic import temp_beside
+from .io.atomic import output_folder, temp_beside
 from .io.gltf import write_glb
 from .segment import LABEL_NAMES
 from .skeleton import Skeleton
@@ -179,9 +179,7 @@ class Rig:
         path = os.fspath(path)
         if not path.lower().endswith(".glb"):
             raise AutobonesError(f"{path}: the output must be a .glb file")
-        folder = os.path.dirname(os.path.abspath(path))
-        if not os.path.isdir(folder):
-            raise AutobonesError(f"{path}: the folder {folder} does not exist")
+        output_folder(path)
         morphs, skipped = [], []
         if expressions is not False and expressions is not None:
             from .morph_targets import au_morph_targets

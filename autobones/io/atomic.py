@@ -1,4 +1,4 @@
-"""Write a text file so that a reader sees the old file or the whole new one, never a part."""
+"""Write a file so that a reader sees the old file or the whole new one, never a part."""
 from __future__ import annotations
 
 import os
@@ -27,26 +27,33 @@ def temp_beside(path, suffix=".tmp"):
     return fd, tmp
 
 
-def write_text_atomic(path, text, what="file"):
-    """Write ``text`` to a temporary file beside ``path``, then rename it into place.
+def output_folder(path):
+    """The folder ``path`` will be written in; AutobonesError when it does not exist."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
+    return folder
+
+
+def write_bytes_atomic(path, data, what="file"):
+    """Write ``data`` to a temporary file beside ``path``, then rename it into place.
 
     Parameters
     ----------
     path : str or os.PathLike
         Target file; its folder must exist.
-    text : str
-        Content (UTF-8).
+    data : bytes
+        Content.
     what : str
         What the file is, for the error message (e.g. ``"the batch report"``).
     """
     path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise AutobonesError(f"{path}: the folder {folder} does not exist; create it first")
+    output_folder(path)
     fd, tmp = temp_beside(path)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
         os.replace(tmp, path)
     except OSError as exc:
         try:
@@ -54,3 +61,9 @@ def write_text_atomic(path, text, what="file"):
         except OSError:
             pass
         raise AutobonesError(f"{path}: cannot write {what} ({exc.strerror or exc})") from None
+    return path
+
+
+def write_text_atomic(path, text, what="file"):
+    """:func:`write_bytes_atomic` of ``text`` encoded as UTF-8."""
+    return write_bytes_atomic(path, text.encode("utf-8"), what)

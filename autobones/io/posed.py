@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from ..errors import AutobonesError
-from .atomic import temp_beside
+from .atomic import output_folder, write_bytes_atomic
 
 FORMATS = (".obj", ".glb")
 
@@ -39,9 +39,7 @@ def write_posed_mesh(path, V, F, comment=None):
     ext = os.path.splitext(path)[1].lower()
     if ext not in FORMATS:
         raise AutobonesError(f"{path}: the posed mesh is written as .obj or .glb, not {ext or 'no extension'!r}")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise AutobonesError(f"{path}: the folder {folder} does not exist")
+    output_folder(path)
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     if ext == ".obj":
@@ -55,15 +53,5 @@ def write_posed_mesh(path, V, F, comment=None):
         import trimesh
 
         data = trimesh.Trimesh(V, F, process=False, validate=False).export(file_type="glb")
-    fd, tmp = temp_beside(path)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise AutobonesError(f"{path}: cannot write ({exc.strerror or exc})") from None
+    write_bytes_atomic(path, data, "the posed mesh")
     return path
