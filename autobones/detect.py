@@ -79,7 +79,6 @@ PROFILE_TILT = 15.0
 #: background around the face, which a face-only scan does not have).
 FACE_FIELD = 1.5
 
-FACING_POWER = 2
 
 #: Picture size for finding the face on the whole head (the face detector works at 128 px).
 SEARCH_SIZE = 256
@@ -91,6 +90,10 @@ KEY_LIGHT = (0.0, 0.6, 1.0)
 NO_FACE = ("no face found in the renders of {what}: automatic landmarks work on human and "
            "human-like faces; give its landmarks in a file instead (the contract's JSON, a MeshLab "
            ".pp or an iBUG-68 list: transfer --landmarks FILE, landmarks --from FILE)")
+
+
+class NoFaceError(AutobonesError):
+    """The pictures show no face the detector knows (an animal, a robot, the back of a head)."""
 
 
 class DetectedLandmarks(dict):
@@ -452,7 +455,8 @@ class LandmarkDetector:
         # MediaPipe's graph threads log to file descriptor 2 while they work
         quiet = _quiet_stderr() if isinstance(detector, MediaPipeFaceMesh) else contextlib.nullcontext()
         with quiet:
-            found = self._detect(V, F, frame, detector, what, search=self.search)
+            skin = skin_faces(V, F)             # the same in every frame the loop below tries
+            found = self._detect(V, F, skin, frame, detector, what, search=self.search)
             # a face turned away from the frame's front (a head turned in its file, a face-only
             # scan): look again, square to the face the landmarks describe
             for _ in range(3):          # a face first found from far off its front converges
@@ -460,11 +464,11 @@ class LandmarkDetector:
                 if turn_degrees(again.rotation, found.frame.rotation) <= self.max_turn:
                     break
                 try:
-                    found = self._detect(V, F, again, detector, what, search=False)
-                except AutobonesError:
+                    found = self._detect(V, F, skin, again, detector, what, search=False)
+                except NoFaceError:
                     break               # keep what the first pictures gave
         if not plausible(found):
-            raise AutobonesError(NO_FACE.format(what=what))
+            raise NoFaceError(NO_FACE.format(what=what))
         return found
 
     def _find_face(self, Vc, F, detector, what, search):
@@ -508,9 +512,9 @@ class LandmarkDetector:
                 if P2 is not None and nose_forward(P2, table):
                     M, P0 = Q @ M, P2
             return M, P0
-        raise AutobonesError(NO_FACE.format(what=what))
+        raise NoFaceError(NO_FACE.format(what=what))
 
-    def _detect(self, V, F, frame, detector, what, search):
+    def _detect(self, V, F, skin, frame, detector, what, search):
         Vc = frame.to_canonical(V)
 
         # 1. find the face on a whole-head picture and turn the frame to face it
@@ -526,7 +530,6 @@ class LandmarkDetector:
 
         # 2. every view: picture, 2-D points, lift
         cands, weights, view_info = [], [], []
-        skin = skin_faces(Vc, F)
         Fs = F if skin.all() else F[skin]
         N = vertex_normals(Vc, F)
         tree = cKDTree(Vc)
@@ -552,9 +555,9 @@ class LandmarkDetector:
             _, near = tree.query(np.nan_to_num(P))
             facing = np.clip(N[near] @ d, 0.0, 1.0)
             cands.append(P)
-            weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** FACING_POWER, 0.0))
+            weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** 2, 0.0))
         if not cands:
-            raise AutobonesError(NO_FACE.format(what=what))
+            raise NoFaceError(NO_FACE.format(what=what))
         X, w = np.array(cands), np.array(weights)
         table = getattr(detector, "points", MEDIAPIPE_POINTS)
         names = [n for n in table]
@@ -569,7 +572,7 @@ class LandmarkDetector:
         iex = names.index("exocanthion_l"), names.index("exocanthion_r")
         unit_c = float(np.linalg.norm(comb[iex[0]] - comb[iex[1]]))
         if not np.isfinite(unit_c) or unit_c <= 0:
-            raise AutobonesError(NO_FACE.format(what=what))
+            raise NoFaceError(NO_FACE.format(what=what))
         dev = np.linalg.norm(Xn - comb[None], axis=2) / unit_c          # (v, k)
         dev = np.where(wn > 0, dev, np.nan)
         spread = np.nanmedian(dev, axis=0) if len(cands) > 1 else np.zeros(len(names))

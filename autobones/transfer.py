@@ -67,26 +67,28 @@ _DETECTED = {}
 
 
 def generic_detected_landmarks(generic, rig=None):
-    """Automatic landmarks of the generic rig's own skin (cached per rig folder), or None when
-    its skin shows no face the detector knows."""
-    from .detect import LandmarkDetector
+    """Automatic landmarks of the generic rig's own skin, or None when its skin shows no face
+    the detector knows. Cached: per rig folder (and its mesh's time stamp) across calls, on
+    the object itself for a LabelledRig given directly."""
+    from .detect import LandmarkDetector, NoFaceError
 
-    key = None
+    def detect():
+        try:
+            return dict(LandmarkDetector().detect(generic.vertices, generic.faces, what="the generic rig"))
+        except NoFaceError:
+            return None
+
     if rig is None or isinstance(rig, (str, os.PathLike)):
         from generic_rig import default_rig_path
 
         folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
         key = (folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
-    else:
-        key = ("object", id(generic))
-    if key not in _DETECTED:
-        try:
-            _DETECTED[key] = dict(LandmarkDetector().detect(generic.vertices, generic.faces, what="the generic rig"))
-        except AutobonesError as exc:
-            if "no face found" not in str(exc):
-                raise
-            _DETECTED[key] = None
-    return _DETECTED[key]
+        if key not in _DETECTED:
+            _DETECTED[key] = detect()
+        return _DETECTED[key]
+    if not hasattr(generic, "_detected_landmarks"):
+        generic._detected_landmarks = detect()
+    return generic._detected_landmarks
 
 
 def ride(points, V_src, F_src, P):
