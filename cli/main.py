@@ -158,8 +158,7 @@ def build_parser():
     p.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
     p.add_argument("--density", default="medium",
                    help="facial bones: sparse (8), medium (16, default), dense (32) or a number")
-    p.add_argument("--up", help="input axis that points up: +x -x +y -y +z -z (default: detected)")
-    p.add_argument("--front", help="input axis the face looks along (default: detected)")
+    _axes(p)
     p.add_argument("--seed", type=int, default=0, help="random seed of the k-means restarts (default 0)")
     p.add_argument("--landmarks", help="optional landmark file: transfer the generic rig's neck, head, jaw and "
                                       "eyes first and place the facial bones on the transferred face")
@@ -181,8 +180,7 @@ def build_parser():
                         "automatically on a human face, see `autobones landmarks`)")
     t.add_argument("--rig", help="generic rig folder made by `autobones build-rig` (default: the built-in one)")
     t.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
-    t.add_argument("--up", help="input axis that points up (default: detected; used to check left/right)")
-    t.add_argument("--front", help="input axis the face looks along (default: detected)")
+    _axes(t, "; used to check left/right")
     t.add_argument("--expressions", action="store_true",
                    help="also write each FACS action unit as a morph target (AU1 ... AU43, intensity 1, "
                         "computed on this head; see `autobones pose --help`)")
@@ -229,8 +227,7 @@ def build_parser():
     m.add_argument("--from", dest="source", metavar="FILE",
                    help="read the landmarks from FILE (contract .json, MeshLab .pp, iBUG-68) instead of detecting")
     m.add_argument("--preview", metavar="PNG", help="also draw a front and a side picture with every landmark named")
-    m.add_argument("--up", help="input axis that points up: +x -x +y -y +z -z (default: detected)")
-    m.add_argument("--front", help="input axis the face looks along (default: detected)")
+    _axes(m)
     _common(m)
 
     b = sub.add_parser(
@@ -273,6 +270,11 @@ def build_parser():
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary table")
     _common(a)
     return parser
+
+
+def _axes(p, note=""):
+    p.add_argument("--up", help=f"input axis that points up: +x -x +y -y +z -z (default: detected{note})")
+    p.add_argument("--front", help="input axis the face looks along (default: detected)")
 
 
 def _common(p):
