@@ -482,12 +482,16 @@ class ExpressionModel:
             self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
             self.lid_pivots_[e] = c
         self.lid_lower_range_ = float(lid["lower_range"])
-        if t_s > 0:  # the same ~1 mm smoothing as the muscle fields (eye corners have tiny triangles)
+        # smoothed like the muscle fields, but wider: a lid joint turns its skin by the full closing
+        # angle, so a weight that changes within a few of the eye corners' tiny triangles folds them
+        t_l = (float(lid.get("smoothing", model.get("smoothing", 0.012))) * fu) ** 2
+        if t_l > 0:
             from scipy.sparse.linalg import splu
 
-            lu = splu((M + t_s * Lp).tocsc())
+            lu = splu((M + t_l * Lp).tocsc())
             lw = lu.solve(np.asarray(M @ self.lid_weights_[:, first].T))[index].T
-            self.lid_weights_ = np.clip(lw, 0.0, 1.0) * skin
+            # diffusion reaches the whole skin with vanishing weights: the lids keep their own area
+            self.lid_weights_ = np.where(lw > 1e-3, np.clip(lw, 0.0, 1.0), 0.0) * skin
         # the lid margins ride the eyeball: the muscles around (frontalis, zygomatics) stretch the
         # lids' skin but leave the margins to the lid joints
         hold = float(lid.get("margin_hold", 0.85)) * self.lid_weights_.max(axis=0)

@@ -81,6 +81,26 @@ def test_ict_eyeballs_follow_the_eye_bones(transferred):
         bound = W[:, names.index(eye)] > 0.99
         assert bound.sum() > 500  # the separate eyeball parts
         assert np.sign(rig.frame.to_canonical(rig.vertices[bound])[:, 0].mean()) == side
+        # the eye bone turns the eyeball about its own centre (the warped pivot was 6-8% of
+        # ex-ex off it): the bound vertices keep their distance to the pivot within the cornea
+        # bulge, and the pivot is the sphere's centre to 1% of ex-ex
+        from autobones.transfer import fit_sphere
+
+        P = rig.vertices[bound]
+        centre, radius = fit_sphere(P)
+        ex = np.linalg.norm(np.subtract(rig.extra["landmarks"]["exocanthion_l"], rig.extra["landmarks"]["exocanthion_r"]))
+        assert np.linalg.norm(rig.skeleton.heads[names.index(eye)] - centre) < 0.01 * ex
+
+
+def test_fit_sphere_recovers_a_sphere_and_ignores_its_frame():
+    from autobones.transfer import fit_sphere
+
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(400, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    for centre, radius in (([0.0, 0.0, 0.0], 1.0), ([1e3, -2e3, 5e2], 12.0), ([0.3, 0.1, -0.2], 1e-3)):
+        c, r = fit_sphere(np.asarray(centre) + radius * d * (1 + 1e-3 * rng.normal(size=(400, 1))))
+        assert np.linalg.norm(c - centre) < 1e-2 * radius and abs(r - radius) < 1e-2 * radius
 
 
 def test_skeleton_lands_inside_the_head(transferred):
