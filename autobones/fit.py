@@ -30,12 +30,18 @@ repeated linear least squares (seed 000 eq. 5.4)::
   pull the mesh; to keep the matrix constant it is folded into the target
   of the forward term, ``c_i <- (c_i + r_i m_i) / (1 + r_i)``;
 - the shape term keeps every source edge ``v_i - v_j`` at its source length
-  times the landmark scale ``s``, turned by the rotation ``R_ij`` of the local
-  normal. It is seed 000's smoothness term (a vertex near its neighbours'
-  centroid) made relative to the source's own differential coordinates: it
-  is the uniform graph Laplacian, and with ``R = I, s = 1`` its minimum is the
-  source itself. We tried the bi-Laplacian form ``||L x - L x_tps||^2`` too:
-  less accurate and its LU factor is 3x larger (see benchmarks/correspondence.py);
+  times the landmark scale ``s``, turned first by the axis turn between the
+  two files (:func:`axis_turn`: a head modelled facing another axis, like the
+  goat's muzzle along -X) and then by the rotation ``R_ij`` of the local
+  normal. ``R_ij`` only tilts the normal: without the axis turn, edges around
+  every normal near the turn's axis keep the source's heading about it and the
+  fit twists the surface sideways to comply (the generic's right side landed
+  across the goat's midline). It is seed 000's smoothness term (a vertex near
+  its neighbours' centroid) made relative to the source's own differential
+  coordinates: it is the uniform graph Laplacian, and with ``R = I, s = 1``
+  its minimum is the source itself. We tried the bi-Laplacian form
+  ``||L x - L x_tps||^2`` too: less accurate and its LU factor is 3x larger
+  (see benchmarks/correspondence.py);
 - the binding term pulls mesh boundary vertices (neck cut, eye and mouth
   openings) to the target's boundary of the same part: goes beyond the seeds,
   it is the only cue for where the neck ends;
@@ -77,6 +83,7 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
@@ -191,6 +198,28 @@ def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big
     return has, M, a
 
 
+def axis_turn(A):
+    """The axis-aligned rotation nearest the linear part ``A`` (3, 3) of a row-vector map
+    ``x -> x @ A + t``: (3, 3), a signed permutation with det +1, applied as ``x @ R``.
+
+    Each source axis goes to the target axis it is most aligned with after the polar
+    rotation of ``A``: the 24 axis turns are the ways a mesh file can choose its up and
+    front. The identity for a head modelled facing the generic's way (tilted by less than
+    about 45 degrees: such heads fit exactly as before); never farther from the polar
+    rotation than the identity is.
+    """
+    U, _, Vt = np.linalg.svd(np.asarray(A, dtype=np.float64))
+    R = U @ Vt
+    R = R * np.where(np.linalg.det(R) < 0, -1.0, 1.0)   # mirrored landmarks: the nearest rotation
+    T = np.zeros((3, 3))
+    rows, cols = linear_sum_assignment(-np.abs(R))
+    T[rows, cols] = np.sign(R[rows, cols])
+    if np.linalg.det(T) < 0:   # keep it a rotation: flip the least certain axis
+        k = int(np.argmin(np.abs(R[rows, cols])))
+        T[rows[k], cols[k]] *= -1.0
+    return T
+
+
 def _decimate(V, F, count):
     """Quadric-error decimation of ``(V, F)`` to about ``count`` vertices (fast_simplification, else libigl)."""
     try:
@@ -249,8 +278,10 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         N_src = _vertex_normals(X, F_src)
         edge_src = X[E[:, 0]] - X[E[:, 1]]
     else:
-        N_src = _vertex_normals(V_src, F_src)
-        edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]])
+        # in the target file's axes: R_ij below only tilts the normal and cannot turn edges about it
+        turn = axis_turn(tps.affine_[1:])
+        N_src = _vertex_normals(V_src, F_src) @ turn
+        edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]]) @ turn
     n_edge_src = N_src[E[:, 0]] + N_src[E[:, 1]]
     n_edge_src /= np.maximum(np.linalg.norm(n_edge_src, axis=1, keepdims=True), 1e-12)
     in_face = np.zeros(n, dtype=bool)
