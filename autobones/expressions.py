@@ -24,16 +24,17 @@ influence fields, regions, skeleton and skin weights, landmarks):
 4. eyelids (four lid joints rotating about the eye pivots, weights built from
    the palpebral landmarks, fading to the eye corners) and bone movements: the
    jaw turns each vertex about its pivot by its jaw weight times the angle, that
-   weight sharpened across the mouth line (so the jaw opens the lower lip only)
-   and spread under the chin (so the skin there stretches); head and neck
+   weight sharpened across the mouth line (so the jaw opens the lower lip only; the cut
+   fades out toward the mouth corners, where the lips join) and spread under the chin
+   (so the skin there stretches); head and neck
    rotations blend by the rig's skin weights (linear blend skinning); eyeballs
    gaze through their eye bones (yaw/pitch, or an aim point). Separate small parts on
    the lids (eyelashes, eye-occlusion shells) follow the skin vertex nearest them;
    the mouth's separate inner parts (teeth, gums, tongue) ride the jaw below the
    occlusal plane (level through the stomion) and the skull above it, teeth whole.
 5. unfolding (beyond the seeds): skin triangles the lids or jaw turn over are relaxed
-   (the displacement replaced by its neighbours' mean, locally, keeping the state with
-   the fewest folds).
+   (the displacement replaced by its neighbours' mean under the intrinsic Laplacian's
+   weights, locally; each relaxed patch is kept only where it leaves less skin folded).
 
 Stages 1 and 3 are linear in the contractions (``muscle_basis_``), stage 2 is a
 clamp that only acts where the skin would sink into the skull, stage 4 is a
@@ -350,6 +351,12 @@ class ExpressionModel:
         # than the tiny triangles of mouth and eye corners can follow without folding
         Lp, M = _laplacian(Vw, Fw)
         self._laplacian = (Lp, M)
+        # unfolding averages over the intrinsic (Delaunay) Laplacian's non-negative weights: a
+        # plain neighbour mean drags the tiny triangles of mouth corners along with big ones
+        Wu = (sp.diags(Lp.diagonal()) - Lp).tocsr()
+        Wu.data = np.maximum(Wu.data, 0.0)
+        Wu.eliminate_zeros()
+        self._unfold_weights = (Wu, np.asarray(Wu.sum(axis=1)).ravel())
         t_s = (float(model.get("smoothing", 0.012)) * fu) ** 2
         if t_s > 0:
             import scipy.sparse as sp
@@ -547,7 +554,11 @@ class ExpressionModel:
                 under = _ramp(Vc[:, 1], men[1] + float(model.get("under_chin_height", 0.15)) * fu, men[1]) * skin
                 fade = _ramp(Vc[:, 2], men[2] - float(model.get("under_chin_depth", 0.6)) * fu, men[2])
                 jaw_b = jaw_b * (1.0 - under * (1.0 - fade))
-            jaw_new = (1.0 - zone) * jaw_b + zone * (1.0 - upper)
+            # the lips join at the corners, where tiny triangles bridge the upper lip (hanging over
+            # the lower) and the lower lip: any step in the jaw weight there turns them over, so the
+            # cut grows from nothing at the cheilions to full at the stomion
+            zone_j = zone * _ramp(dx, hw, 0.0)
+            jaw_new = (1.0 - zone_j) * jaw_b + zone_j * (1.0 - upper)
             others = np.delete(np.arange(W.shape[1]), j)
             rest = W[:, others].sum(axis=1)
             want = 1.0 - jaw_new
@@ -795,13 +806,17 @@ class ExpressionModel:
         jaw weight changes fast (under the chin, the mouth corners) neighbouring skin can swing
         past each other. Skin cannot fold through itself, so around every skin triangle whose
         normal turned by more than 90 degrees (and the two rings of vertices about it) the
-        displacement is replaced by its neighbours' mean (Jacobi passes, the ring outside held),
-        the region growing (never farther than ``unfold_reach`` fu from the first folds) until
-        nothing is turned over, ``rounds`` run out or eight rounds in
-        a row bring no fewer folds; the state with the fewest folds is kept (never more than
-        before). Vertices away from folds keep their displacement exactly.
+        displacement is replaced by its neighbours' mean, weighted by the intrinsic Laplacian
+        (Jacobi passes, the ring outside held), the region growing (never farther than
+        ``unfold_reach`` fu from the first folds) until nothing is turned over, ``rounds`` run
+        out or eight rounds in a row leave no less folded area; the state with the least folded
+        area (rest area of the turned triangles) is kept, and of it each connected relaxed patch
+        only where it leaves less folded area than before (never more anywhere). Vertices away
+        from folds keep their displacement exactly.
         """
-        A, deg, skin_w, Fs, n0 = self._unfold_mesh
+        A, _deg, skin_w, Fs, n0 = self._unfold_mesh
+        Wu, wdeg = self._unfold_weights
+        area = 0.5 * np.linalg.norm(n0, axis=1)
         index, first = self._weld
         Vw = self.canonical_[first]
         dw = d[first].copy()
@@ -811,17 +826,15 @@ class ExpressionModel:
         last, stale, allowed = None, 0, None
         reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
         for _ in range(rounds):
-            P = Vw + dw
-            Fq = Fs[faces]
-            n1 = np.cross(P[Fq[:, 1]] - P[Fq[:, 0]], P[Fq[:, 2]] - P[Fq[:, 0]])
-            bad = faces[(n0[faces] * n1).sum(axis=1) <= 0]
-            if last is None or len(bad) < last:     # keep the state with the fewest folds
+            bad = faces[self._folded(Vw + dw, Fs[faces], n0[faces])]
+            amount = float(area[bad].sum())
+            if last is None or amount < last:       # keep the state with the least folded area
                 best, best_touched = dw.copy(), touched.copy()
             if not len(bad):
                 break
             # stop when relaxing no longer helps (a fold the mean cannot undo)
-            stale = stale + 1 if last is not None and len(bad) >= last else 0
-            last = len(bad) if last is None else min(last, len(bad))
+            stale = stale + 1 if last is not None and amount >= last else 0
+            last = amount if last is None else min(last, amount)
             if stale >= 8:
                 break
             grow[Fs[bad].ravel()] = True
@@ -835,15 +848,37 @@ class ExpressionModel:
             touched |= grow
             rows = np.flatnonzero(grow)
             faces = np.flatnonzero(grow[Fs].any(axis=1))
-            Ar = A[rows]
+            rows = rows[wdeg[rows] > 0]
+            Wr = Wu[rows]
             for _p in range(passes):
-                dw[rows] = (Ar @ dw) / np.maximum(deg[rows], 1.0)[:, None]
+                dw[rows] = (Wr @ dw) / np.maximum(wdeg[rows], 1e-300)[:, None]
         if not best_touched.any():
             return d
+        # each separate relaxed patch is kept only where it leaves less skin folded than before
+        # (a patch grown around a few slivers must not fold their larger neighbours instead)
+        from scipy.sparse.csgraph import connected_components
+
+        T = np.flatnonzero(best_touched)
+        n_c, lab = connected_components(A[T][:, T], directed=False)
+        comp = np.full(len(Vw), n_c)
+        comp[T] = lab
+        face_c = comp[Fs].min(axis=1)              # a face touches at most one patch
+        before, after = (np.bincount(face_c, weights=area * self._folded(Vw + q, Fs, n0), minlength=n_c + 1)
+                         for q in (d[first], best))
+        undo = np.flatnonzero(after[:n_c] >= before[:n_c])
+        if len(undo):
+            back = np.isin(comp, undo)
+            best[back] = d[first][back]
+            best_touched &= ~back
         out = d.copy()
         moved = best_touched[index]
         out[moved] = best[index[moved]]
         return out
+
+    @staticmethod
+    def _folded(P, F, n0):
+        """(m,) bool: triangles ``F`` at positions ``P`` whose normal turned from ``n0`` by over 90 degrees."""
+        return (n0 * np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])).sum(axis=1) <= 0
 
     def _bones(self, d, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None, neck_deg=None,
                unfold=False):
