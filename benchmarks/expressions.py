@@ -20,6 +20,12 @@ transfer's dense correspondence (``copy_through``). Scores per vertex set: all,
 skin (``model.skin_``), parts (the rest) and the skin regions of the transferred
 ``region`` field (``REGIONS``).
 
+Ceilings (after the table): what one joint could explain with ANY weight field, on identity002:
+each vertex turns about the joint's axis (canonical +X through its pivot) by its own best angle
+(``rotation_ceiling``; 0.5-degree grid), for the left upper lid in eyeBlink_L and the jaw (with its
+condyle glide) in jawOpen. Where this is below the target, no lid or jaw weights can reach it and
+the rest must come from the muscles.
+
 Part 3, bones alone, follows.
 
 Data: ICT-FaceKit (``../shared/data/ict``), a linear model whose neutral head
@@ -350,6 +356,28 @@ def copy_through(P_src, P_dst, gF, V_src, F_src, D_src, V_dst):
     return np.einsum("na,nad->nd", B, Dg[T])
 
 
+def rotation_ceiling(model, X, pivot, degrees, glide=None):
+    """Best per-vertex rotation about the canonical +X axis through ``pivot``: each vertex picks
+    its own angle from ``degrees`` (plus ``glide`` (3,) per degree, canonical, the jaw's condyle
+    glide) to match the target positions ``X`` (n, 3, input frame). Free per-vertex angles are
+    any weight field a joint could have, so this bounds what that joint can explain.
+    Returns the fitted positions (n, 3), input frame."""
+    Vc = model.canonical_
+    D = model.frame_.to_canonical(X) - Vc
+    P = Vc - pivot
+    best, res = np.zeros_like(Vc), np.linalg.norm(D, axis=1)
+    for a in degrees:
+        t = np.radians(a)
+        d = np.c_[np.zeros(len(P)), (np.cos(t) - 1) * P[:, 1] - np.sin(t) * P[:, 2],
+                  np.sin(t) * P[:, 1] + (np.cos(t) - 1) * P[:, 2]]
+        if glide is not None:
+            d = d + a * glide[None, :]
+        r = np.linalg.norm(D - d, axis=1)
+        b = r < res
+        res[b], best[b] = r[b], d[b]
+    return model.frame_.from_canonical(Vc + best)
+
+
 def region_masks(rig, skin):
     """Named boolean masks: "all", "skin", "parts" (everything not skin: eyeballs, eyelashes,
     eye-occlusion shells, teeth, tongue...) and the skin's regions (transferred ``region``)."""
@@ -444,6 +472,15 @@ def full_rig_benchmark(source="identity002", targets=("identity000", "identity00
         print(f"  {key[0]} {key[1]:5s} " + "  ".join(f"{e} {fmt(s['all'])}/{fmt(s['skin'])}" for e, s in zip(EXPRESSIONS, v))
               + f"   mean {fmt(np.mean([s['all'] for s in v]))}/{fmt(np.mean([s['skin'] for s in v]))}")
     print(f"full-rig fits and transfers: {t_fit:.1f} s")
+    # what one joint could do with ANY weight field (free angle per vertex), on the source head
+    grid = np.arange(-90.0, 90.01, 0.5)
+    j = m_s.bones_.index("jaw")
+    for e, label, pivot, glide in (("eyeBlink_L", "left upper-lid joint about the eye bone", m_s.lid_pivots_[0], None),
+                                   ("jawOpen", "jaw joint (with its glide)", m_s.pivots_[j], m_s.jaw_glide_)):
+        Xs = Vs + E[e]
+        sc = region_scores(rotation_ceiling(m_s, Xs, pivot, grid, glide), Xs, Vs, masks_s)
+        print(f"ceiling, {e}: the {label} with a free angle per vertex explains "
+              + ", ".join(f"{k} {fmt(v)}" for k, v in sc.items() if k != "parts"))
     return lines
 
 
