@@ -478,6 +478,9 @@ class ExpressionModel:
                 up_step, low_step = _ramp(s_f, -0.5 * gap, 1.5 * gap), _ramp(-s_f, -0.5 * gap, 1.5 * gap)
             # the fissure opens as 1 - u^2 between the corners, so the lid joints turn less there
             u = (Vc[:, 0] - cx) / (0.5 * abs(ex[0] - en[0]))
+            # the medial canthus is tied to bone, the lateral one is looser: toward (and past) the
+            # outer corner the lids keep turning over ``lateral_reach`` half fissure widths
+            u = np.where(u * np.sign(ex[0] - en[0]) > 0, u / float(lid.get("lateral_reach", 1.0)), u)
             h = np.clip(1.0 - u * u, 0.0, 1.0) ** float(lid.get("corner_exponent", 1.0))
             # above the margin the upper lid turns as one sheet: the corners hold the margin only,
             # so their hold fades over ``corner_release`` fissure heights up the lid
