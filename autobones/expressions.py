@@ -22,7 +22,8 @@ influence fields, regions, skeleton and skin weights, landmarks):
 3. creases: frontalis contractions press horizontal furrows into the forehead,
    corrugator ones vertical furrows between the brows.
 4. eyelids (four lid joints rotating about the eye pivots, weights built from
-   the palpebral landmarks, fading to the eye corners) and bone movements: the
+   the palpebral landmarks, fading to the fixed medial eye corner and past the looser
+   lateral one) and bone movements: the
    jaw turns each vertex about its pivot by its jaw weight times the angle, that
    weight sharpened across the mouth line (so the jaw opens the lower lip only; the cut
    fades out toward the mouth corners, where the lips join) and spread under the chin
