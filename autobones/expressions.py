@@ -35,7 +35,10 @@ influence fields, regions, skeleton and skin weights, landmarks):
    occlusal plane (level through the stomion) and the skull above it, teeth whole.
 5. unfolding (beyond the seeds): skin triangles the lids or jaw turn over are relaxed
    (the displacement replaced by its neighbours' mean under the intrinsic Laplacian's
-   weights, locally; each relaxed patch is kept only where it leaves less skin folded).
+   weights, locally; each relaxed patch is kept only where it leaves less skin folded);
+   what that leaves folded (slivers where the surface itself folds sharply, as in the mouth
+   corners' commissure) moves as one piece with the rigid or affine motion of the skin
+   around it (:meth:`ExpressionModel._rigid_patches`).
 
 Stages 1 and 3 are linear in the contractions (``muscle_basis_``), stage 2 is a
 clamp that only acts where the skin would sink into the skull, stage 4 is a
@@ -812,12 +815,17 @@ class ExpressionModel:
         normal turned by more than 90 degrees (and the two rings of vertices about it) the
         displacement is replaced by its neighbours' mean, weighted by the intrinsic Laplacian
         (Jacobi passes, the ring outside held), the region growing (never farther than
-        ``unfold_reach`` fu from the first folds) until nothing is turned over, ``rounds`` run
-        out or eight rounds in a row leave no less folded area; the state with the least folded
-        area (rest area of the turned triangles) is kept, and of it each connected relaxed patch
-        only where it leaves less folded area than before (never more anywhere). Vertices away
-        from folds keep their displacement exactly.
+        ``unfold_reach`` fu from the first folds; each round relaxing only its part within
+        ``unfold_reach`` of the folds left, so skin whose folds are undone is not smoothed on
+        while others persist) until nothing is turned over, ``rounds`` run out or eight rounds
+        in a row leave no less folded area; the state with the least folded area (rest area of
+        the turned triangles) is kept, and of it each connected relaxed patch only where it
+        leaves less folded area than before (never more anywhere). What still folds then moves
+        as one piece with the skin around it (:meth:`_rigid_patches`). Vertices away from folds
+        keep their displacement exactly.
         """
+        from scipy.sparse.csgraph import connected_components
+
         A, _deg, skin_w, Fs, n0 = self._unfold_mesh
         Wu, wdeg = self._unfold_weights
         area = 0.5 * np.linalg.norm(n0, axis=1)
@@ -849,19 +857,29 @@ class ExpressionModel:
             for _ring in range(2):
                 grow |= (A @ grow.astype(np.float64)) > 0
             grow &= allowed
-            touched |= grow
-            rows = np.flatnonzero(grow)
+            # only skin within ``reach`` of the folds left now relaxes further: where folds are
+            # undone (under the chin) the skin is not dragged on toward the harmonic fill while
+            # folds elsewhere (the mouth corners) persist
+            G = np.flatnonzero(grow)
+            near_now = cKDTree(Vw[np.unique(Fs[bad].ravel())]).query(Vw[G], distance_upper_bound=reach)[0]
+            active = np.zeros(len(Vw), dtype=bool)
+            active[G[np.isfinite(near_now)]] = True
+            touched |= active
+            rows = np.flatnonzero(active)
             faces = np.flatnonzero(grow[Fs].any(axis=1))
             rows = rows[wdeg[rows] > 0]
             Wr = Wu[rows]
             for _p in range(passes):
                 dw[rows] = (Wr @ dw) / np.maximum(wdeg[rows], 1e-300)[:, None]
         if not best_touched.any():
-            return d
+            best, rigid = self._rigid_patches(Vw, d[first].copy())
+            if not rigid.any():
+                return d
+            out = d.copy()
+            out[rigid[index]] = best[index[rigid[index]]]
+            return out
         # each separate relaxed patch is kept only where it leaves less skin folded than before
         # (a patch grown around a few slivers must not fold their larger neighbours instead)
-        from scipy.sparse.csgraph import connected_components
-
         T = np.flatnonzero(best_touched)
         n_c, lab = connected_components(A[T][:, T], directed=False)
         comp = np.full(len(Vw), n_c)
@@ -874,10 +892,104 @@ class ExpressionModel:
             back = np.isin(comp, undo)
             best[back] = d[first][back]
             best_touched &= ~back
+        best, rigid = self._rigid_patches(Vw, best)
+        best_touched |= rigid
         out = d.copy()
         moved = best_touched[index]
         out[moved] = best[index[moved]]
         return out
+
+    def _rigid_patches(self, Vw, dw, rings=6, sweeps=12):
+        """Move what relaxation left folded as one piece (welded displacement ``dw``).
+
+        Slivers where the surface itself folds sharply (the mouth corners' commissure, where the
+        upper lip overhangs the lower one; the mouth's lining between the lips) stay turned over
+        under any averaging of the displacement. Each connected cluster of still-folded
+        triangles is grown ring by ring; its vertices take the rigid motion (rotation and
+        translation, least squares), or else the orientation-preserving affine map, that best
+        fits the displacement of the ring of vertices around it, so the cluster turns and
+        stretches only as its surroundings do, the next ``feather`` rings blending back to their
+        own displacement. The first candidate that leaves no triangle about the cluster folded
+        is kept (else the one removing the most folded area, if any; never beyond
+        ``unfold_reach`` fu of the cluster); sweeps repeat while they change anything. Returns
+        the displacement and the vertices moved.
+        """
+        moved = np.zeros(len(Vw), dtype=bool)
+        for _ in range(sweeps):
+            dw, m = self._rigid_sweep(Vw, dw, rings)
+            if not m.any():
+                break
+            moved |= m
+        return dw, moved
+
+    def _rigid_sweep(self, Vw, dw, rings, feathers=(0, 1, 2, 4)):
+        """One sweep of :meth:`_rigid_patches` over the clusters folded now."""
+        A, _deg, skin_w, Fs, n0 = self._unfold_mesh
+        moved = np.zeros(len(Vw), dtype=bool)
+        bad = np.flatnonzero(self._folded(Vw + dw, Fs, n0))
+        if not len(bad):
+            return dw, moved
+        from scipy.sparse.csgraph import connected_components
+
+        area = 0.5 * np.linalg.norm(n0, axis=1)
+        reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
+
+        def grow(mask):
+            return (((A @ mask.astype(np.float64)) > 0) | mask) & skin_w
+
+        V_bad = np.unique(Fs[bad].ravel())
+        n_c, lab = connected_components(A[V_bad][:, V_bad], directed=False)
+        for c in range(n_c):
+            seed = V_bad[lab == c]
+            core = np.zeros(len(Vw), dtype=bool)
+            core[seed] = True
+            centre = Vw[seed].mean(axis=0)
+            best_gain, best_q, done = 0.0, None, False
+            for _r in range(rings):
+                shells = [core]
+                for _f in range(max(feathers) + 1):
+                    shells.append(grow(shells[-1]))
+                ring = shells[1] & ~core
+                R_ = np.flatnonzero(ring)
+                if len(R_) < 3 or np.linalg.norm(Vw[R_] - centre, axis=1).max() > reach:
+                    break
+                X = Vw[R_]
+                Y = X + dw[R_]
+                mx, my = X.mean(axis=0), Y.mean(axis=0)
+                U, _s, Vt = np.linalg.svd((X - mx).T @ (Y - my))
+                D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+                maps = [(U @ D @ Vt).T]                      # y ~ M (x - mx) + my
+                if len(R_) >= 4:
+                    Aff = np.linalg.lstsq(X - mx, Y - my, rcond=None)[0].T
+                    if np.linalg.det(Aff) > 0:
+                        maps.append(Aff)
+                for fe in feathers:
+                    near = shells[fe + 1]
+                    local = np.flatnonzero(near[Fs].any(axis=1))
+                    before = float((area[local] * self._folded(Vw + dw, Fs[local], n0[local])).sum())
+                    alpha = np.zeros(len(Vw))
+                    for k in range(fe + 1):      # 1 on the core, fading over the feather rings
+                        alpha[shells[k] & (alpha == 0)] = 1.0 - k / (fe + 1.0)
+                    rows = np.flatnonzero(alpha > 0)
+                    for Mm in maps:
+                        q = dw.copy()
+                        target = (Vw[rows] - mx) @ Mm.T + my - Vw[rows]
+                        q[rows] = alpha[rows, None] * target + (1.0 - alpha[rows, None]) * dw[rows]
+                        amount = float((area[local] * self._folded(Vw + q, Fs[local], n0[local])).sum())
+                        if before - amount > best_gain:
+                            best_gain, best_q = before - amount, (rows, q[rows])
+                        if amount == 0.0 and before > 0.0:
+                            done = True
+                            break
+                    if done:
+                        break
+                if done:
+                    break
+                core = shells[1]
+            if best_q is not None:
+                dw[best_q[0]] = best_q[1]
+                moved[best_q[0]] = True
+        return dw, moved
 
     @staticmethod
     def _folded(P, F, n0):
