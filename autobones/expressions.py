@@ -563,10 +563,10 @@ class ExpressionModel:
                 jaw_b = jaw_b * (1.0 - under * (1.0 - fade))
             # the lips join at the corners, where tiny triangles bridge the upper lip (hanging over
             # the lower) and the lower lip: any step in the jaw weight there turns them over, so the
-            # cut grows from nothing at the cheilions to full a quarter of the mouth's half-width in
-            # (full only at the stomion pinned the corners: a V-shaped opening, ICT's jawOpen lips
-            # 71.5 -> 74.1 % explained with the quarter)
-            zone_j = zone * _ramp(dx, hw, 0.75 * hw)
+            # cut grows from nothing at the cheilions to full half the mouth's half-width in (full
+            # only at the stomion pinned the corners, a V-shaped opening; nearer the corners the
+            # mouth's lining folds at AU26 and the unfolding moves a wide patch of it)
+            zone_j = zone * _ramp(dx, hw, 0.5 * hw)
             jaw_new = (1.0 - zone_j) * jaw_b + zone_j * (1.0 - upper)
             others = np.delete(np.arange(W.shape[1]), j)
             rest = W[:, others].sum(axis=1)
