@@ -341,19 +341,9 @@ def copy_through(P_src, P_dst, gF, V_src, F_src, D_src, V_dst):
     target; it takes the source displacement at its point (barycentric on the source triangle),
     and each target vertex takes the displacement at its closest point on the generic mesh laid
     on the target (P_dst, gF). Returns (n_dst, 3)."""
-    import igl
+    from autobones.transfer import ride
 
-    def bary(P, V, F):
-        _, fi, C = igl.point_mesh_squared_distance(np.ascontiguousarray(P), np.ascontiguousarray(V),
-                                                   np.ascontiguousarray(F))
-        T = F[fi]
-        B = igl.barycentric_coordinates(C, *(np.ascontiguousarray(V[T[:, a]]) for a in range(3)))
-        return T, B
-
-    T, B = bary(P_src, V_src, F_src)
-    Dg = np.einsum("na,nad->nd", B, D_src[T])
-    T, B = bary(V_dst, P_dst, gF)
-    return np.einsum("na,nad->nd", B, Dg[T])
+    return ride(V_dst, P_dst, gF, ride(P_src, V_src, F_src, D_src))
 
 
 def rotation_ceiling(model, X, pivot, degrees, glide=None):

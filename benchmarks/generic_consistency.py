@@ -9,7 +9,7 @@ Run by hand::
 correspondence); muscles, regions and skin weights ride these points. ICT-FaceKit's identities share
 one vertex list, so a point of identity a (a triangle and barycentric coordinates) names the same
 anatomical point on identity b. For each ordered pair (a, b): P_a[g] is expressed on a's triangle
-and evaluated on b, and compared with P_b[g]. Error per generic vertex in % of b's outer-eye-corner
+and evaluated on b (``autobones.transfer.ride``), and compared with P_b[g]. Error per generic vertex in % of b's outer-eye-corner
 distance, mean / 95th percentile, over all generic vertices and per region of the generic rig.
 The benchmark that measures the fit itself between two ICT heads is ``correspondence.py``.
 """
@@ -20,24 +20,15 @@ import json
 import subprocess
 from pathlib import Path
 
-import igl
 import numpy as np
 
 import autobones
-from autobones.transfer import load_generic
+from autobones.transfer import load_generic, ride
 
 ROOT = Path(__file__).resolve().parents[1]
 ICT = ROOT.parent / "shared" / "data" / "ict"
 HEADS = ("identity002", "identity000", "identity001")
 REGIONS = ("lips", "eyelids", "brow", "forehead", "cheeks", "nose")
-
-
-def carry(P_a, V_a, F, V_b):
-    """Points P_a (m, 3) on mesh (V_a, F) -> the same barycentric points on (V_b, F)."""
-    _, fi, C = igl.point_mesh_squared_distance(P_a, V_a, F)
-    T = F[fi]
-    B = igl.barycentric_coordinates(C, *(np.ascontiguousarray(V_a[T[:, k]]) for k in range(3)))
-    return np.einsum("na,nad->nd", B, V_b[T])
 
 
 def main():
@@ -63,7 +54,7 @@ def main():
             for b in HEADS:
                 if a == b:
                     continue
-                err = np.linalg.norm(carry(P[a], V[a], F, V[b]) - P[b], axis=1) / ex[b] * 100
+                err = np.linalg.norm(ride(P[a], V[a], F, V[b]) - P[b], axis=1) / ex[b] * 100
                 cells = [f"{err.mean():.2f} / {np.percentile(err, 95):.2f}"]
                 for r in REGIONS:
                     e = err[region == labels.index(r)]
