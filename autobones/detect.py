@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
 from .io.landmarks import NAMES, mirror_name
-from .orient import Frame, detect_frame
+from .orient import Frame, detect_frame, reflect
 from .render import Camera, look_at, orthographic_camera, rasterize, shade, surface_points, vertex_normals
 
 #: MediaPipe Face Mesh point indices -> contract name (the mean of the listed points).
@@ -667,23 +667,22 @@ def refine(Vc, F, points, unit, max_mirror_error):
     out = {n: np.array(p, dtype=np.float64) for n, p in points.items()}
     flagged = {}
     n_, c = symmetry_plane(out)
-    reflect = lambda p: p - 2.0 * (p @ n_ - c) * n_
     for n in list(out):
         if n.endswith("_l") and mirror_name(n) in out:
             m = mirror_name(n)
-            a, b = out[n], reflect(out[m])
+            a, b = out[n], reflect(out[m], n_, c)
             err = float(np.linalg.norm(a - b)) / unit
             if err > max_mirror_error:
                 flagged[n] = flagged[m] = (f"left and right are not mirror images "
                                            f"({100 * err:.1f}% of the eye-corner distance apart)")
             mid = (a + b) / 2.0
-            out[n], out[m] = mid, reflect(mid)
+            out[n], out[m] = mid, reflect(mid, n_, c)
         elif not n.endswith(("_l", "_r")):
             out[n] = out[n] - (out[n] @ n_ - c) * n_
     for n in list(out):
         if n.endswith(("_l", "_r")) and mirror_name(n) not in out:
             # its own views disagreed: the mirror image of the other side stands in
-            out[mirror_name(n)] = reflect(out[n])
+            out[mirror_name(n)] = reflect(out[n], n_, c)
             flagged[mirror_name(n)] = f"mirrored from {n}"
     # the face's own vertical: eye corners over the mouth, in the mirror plane
     eyes = [out[k] for k in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r") if k in out]

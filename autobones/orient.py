@@ -243,9 +243,16 @@ def _base_score(cues, up):
     return float(flat_part + 0.05 * rim_part)
 
 
+def reflect(P, normal, offset):
+    """Points ``P`` (..., 3) mirrored through the plane ``normal . x = offset`` (unit normal);
+    same frame and units."""
+    P = np.asarray(P, dtype=np.float64)
+    return P - 2.0 * (P @ normal - offset)[..., None] * normal
+
+
 def _refine_plane(P, tree, n, d, iterations=12):
     for _ in range(iterations):
-        mirrored = P - 2.0 * ((P @ n) - d)[:, None] * n
+        mirrored = reflect(P, n, d)
         dist, j = tree.query(mirrored)
         keep = dist <= np.quantile(dist, 0.8)
         diff = (P - P[j])[keep]
@@ -260,8 +267,7 @@ def _refine_plane(P, tree, n, d, iterations=12):
 
 
 def _mirror_error(P, tree, n, d):
-    mirrored = P - 2.0 * ((P @ n) - d)[:, None] * n
-    dist, _ = tree.query(mirrored)
+    dist, _ = tree.query(reflect(P, n, d))
     return float(np.sort(dist)[: int(0.9 * len(dist))].mean())
 
 

@@ -6,9 +6,9 @@ Run by hand, not by the tests::
     python benchmarks/symmetry.py goat robot      # some of them
 
 Every head is rigged by ``autobones.transfer`` with its landmark file and
-``ExpressionModel`` is fitted on it. The mirror plane is fitted to the head's
-bilateral landmark pairs (normal: the mean unit ``x_l - x_r``; through the mean
-pair midpoint), so nothing assumes the file's axes. All lengths are in percent
+``ExpressionModel`` is fitted on it. The mirror plane is the landmarks' own
+(``autobones.detect.symmetry_plane``: normal the median unit ``x_l - x_r``, through
+the median of the pair midpoints and midline names), so nothing assumes the file's axes. All lengths are in percent
 of the head's exocanthion distance (ex-ex). Columns:
 
 - ``lm``: landmark pairs' own mirror mismatch ``|mirror(x_l) - x_r|``, mean / max
@@ -44,6 +44,9 @@ ROOT = HERE.parent
 DATA = ROOT.parent / "shared" / "data"
 sys.path.insert(0, str(ROOT))
 
+from autobones.detect import symmetry_plane  # noqa: E402  (the landmarks' mirror plane)
+from autobones.orient import reflect  # noqa: E402
+
 HEADS = {  # name: (mesh or None for the default head, landmark file)
     "goat": (DATA / "misc/goathead.obj", ROOT / "tests/landmarks/goathead.landmarks.json"),
     "robot": (DATA / "misc/robot_head_neutral.obj", ROOT / "tests/landmarks/robot_head_neutral.landmarks.json"),
@@ -52,32 +55,10 @@ HEADS = {  # name: (mesh or None for the default head, landmark file)
 }
 
 
-def mirror_plane(landmarks):
-    """Mirror plane of bilateral landmark pairs ``<name>_l`` / ``<name>_r``.
-
-    landmarks : dict of str -> (3,) float. Returns ``(normal, offset)``: unit (3,) normal
-    pointing to the subject's left and the plane ``normal . x = offset`` (landmark units).
-    """
-    L = {k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()}
-    left = [k for k in L if k.endswith("_l") and k[:-2] + "_r" in L]
-    D = np.array([L[k] - L[k[:-2] + "_r"] for k in left])
-    n = (D / np.linalg.norm(D, axis=1, keepdims=True)).mean(axis=0)
-    n /= np.linalg.norm(n)
-    mids = np.array([0.5 * (L[k] + L[k[:-2] + "_r"]) for k in left])
-    return n, float((mids @ n).mean())
-
-
-def reflect(P, plane):
-    """Points ``P`` (..., 3) mirrored through ``plane`` = (unit normal, offset); same units."""
-    n, d = plane
-    P = np.asarray(P, dtype=np.float64)
-    return P - 2.0 * (P @ n - d)[..., None] * n
-
-
 def pair_mismatch(points, plane):
     """``|mirror(x_l) - x_r|`` for every ``<name>_l`` / ``<name>_r`` pair of ``points``
     (dict of str -> (3,)); (pairs,) float, input units."""
-    return np.array([np.linalg.norm(reflect(points[k], plane) - np.asarray(points[k[:-2] + "_r"]))
+    return np.array([np.linalg.norm(reflect(points[k], *plane) - np.asarray(points[k[:-2] + "_r"]))
                      for k in points if k.endswith("_l") and k[:-2] + "_r" in points])
 
 
@@ -85,7 +66,7 @@ def mirror_partners(V, plane, mask=None):
     """(n,) index of the vertex of ``V`` (n, 3) nearest each vertex's mirror image, among
     ``mask`` (n,) bool when given."""
     idx = np.arange(len(V)) if mask is None else np.flatnonzero(mask)
-    return idx[cKDTree(V[idx]).query(reflect(V, plane))[1]]
+    return idx[cKDTree(V[idx]).query(reflect(V, *plane))[1]]
 
 
 def displacement_asymmetry(V, D, plane, mask):
@@ -109,12 +90,12 @@ def symmetric_bumps(V, muscles, plane, width):
         if not (k.endswith("_l") and k[:-2] + "_r" in by):
             continue
         r = by[k[:-2] + "_r"]
-        c = 0.5 * (np.asarray(m["insertion"]) + reflect(r["insertion"], plane))
+        c = 0.5 * (np.asarray(m["insertion"]) + reflect(r["insertion"], *plane))
         e = np.asarray(m["insertion"]) - m["origin"]
         f = np.asarray(r["insertion"]) - r["origin"]
         e = e + f - 2.0 * (f @ n) * n
         e /= np.linalg.norm(e)
-        for cc, ee in ((c, e), (reflect(c, plane), e - 2.0 * (e @ n) * n)):
+        for cc, ee in ((c, e), (reflect(c, *plane), e - 2.0 * (e @ n) * n)):
             D += np.exp(-((V - cc) ** 2).sum(axis=1) / width ** 2)[:, None] * ee
     return D
 
@@ -131,18 +112,18 @@ def measure(name, mesh, marks):
     model = ExpressionModel().fit(rig)
     seconds = time.perf_counter() - t0
     lm = {k: np.asarray(v) for k, v in rig.extra["landmarks"].items()}
-    plane = mirror_plane(lm)
+    plane = symmetry_plane(lm)
     unit = 0.01 * float(np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]))   # 1 % of ex-ex
     generic = load_generic()
     P = details["correspondence"]
-    m = mirror_partners(generic.vertices, mirror_plane(generic.landmarks))
-    corr = np.linalg.norm(reflect(P, plane) - P[m], axis=1) / unit
+    m = mirror_partners(generic.vertices, symmetry_plane(generic.landmarks))
+    corr = np.linalg.norm(reflect(P, *plane) - P[m], axis=1) / unit
     mus = {x["name"]: x for x in rig.extra["muscles"]}
     origins = pair_mismatch({k: x["origin"] for k, x in mus.items()}, plane) / unit
     insertions = pair_mismatch({k: x["insertion"] for k, x in mus.items()}, plane) / unit
     V, skin = rig.vertices, model.skin_
     wires = {w["muscle"]: V[w["vertices"]] for w in model.wires_}
-    wire = np.array([np.linalg.norm(reflect(wires[k], plane) - wires[k[:-2] + "_r"], axis=1).mean()
+    wire = np.array([np.linalg.norm(reflect(wires[k], *plane) - wires[k[:-2] + "_r"], axis=1).mean()
                      for k in wires if k.endswith("_l") and k[:-2] + "_r" in wires]) / unit
     happy = model.pose(expression="happiness") - V
     au12 = model.pose(au={12: 1.0}) - V

@@ -11,8 +11,10 @@ import pytest
 from scipy.spatial import cKDTree
 
 import autobones
+from autobones.detect import symmetry_plane
 from autobones.expressions import ExpressionModel
 from autobones.fit import axis_turn, dense_correspondence
+from autobones.orient import reflect
 from autobones.transfer import load_generic
 
 from shared_data import ROOT, data
@@ -20,29 +22,11 @@ from shared_data import ROOT, data
 GOAT = (data("misc/goathead.obj"), ROOT / "tests" / "landmarks" / "goathead.landmarks.json")
 
 
-def mirror_plane(landmarks):
-    """(unit normal to the subject's left, offset) of the plane ``n . x = d`` through the
-    midpoints of the ``_l`` / ``_r`` landmark pairs, normal their mean unit difference."""
-    L = {k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()}
-    left = [k for k in L if k.endswith("_l") and k[:-2] + "_r" in L]
-    D = np.array([L[k] - L[k[:-2] + "_r"] for k in left])
-    n = (D / np.linalg.norm(D, axis=1, keepdims=True)).mean(axis=0)
-    n /= np.linalg.norm(n)
-    return n, float(np.mean([0.5 * (L[k] + L[k[:-2] + "_r"]) @ n for k in left]))
-
-
-def reflect(P, plane):
-    """Points (..., 3) mirrored through ``plane``; same units."""
-    n, d = plane
-    P = np.asarray(P, dtype=np.float64)
-    return P - 2.0 * (P @ n - d)[..., None] * n
-
-
 @pytest.fixture(scope="module")
 def goat():
     rig = autobones.transfer(*GOAT)
     lm = rig.extra["landmarks"]
-    plane = mirror_plane(lm)
+    plane = symmetry_plane(lm)
     exex = float(np.linalg.norm(np.subtract(lm["exocanthion_l"], lm["exocanthion_r"])))
     return rig, plane, exex
 
@@ -56,7 +40,7 @@ def test_goat_muscle_pairs_are_mirror_images(goat):
     pairs = [k for k in mus if k.endswith("_l") and k[:-2] + "_r" in mus]
     assert len(pairs) == 13
     for end in ("origin", "insertion"):
-        miss = [np.linalg.norm(reflect(mus[k][end], plane) - np.asarray(mus[k[:-2] + "_r"][end])) / exex
+        miss = [np.linalg.norm(reflect(mus[k][end], *plane) - np.asarray(mus[k[:-2] + "_r"][end])) / exex
                 for k in pairs]
         assert max(miss) < 0.15, (end, dict(zip(pairs, np.round(miss, 3))))
 
@@ -71,7 +55,7 @@ def test_goat_symmetric_expression_moves_both_sides_alike(goat):
     model = ExpressionModel().fit(rig)
     V, skin = rig.vertices, model.skin_
     idx = np.flatnonzero(skin)
-    partner = idx[cKDTree(V[idx]).query(reflect(V, plane))[1]]
+    partner = idx[cKDTree(V[idx]).query(reflect(V, *plane))[1]]
     n = plane[0]
     side = V @ n - plane[1]
     for kw in ({"expression": "happiness"}, {"au": {12: 1.0}}):
