@@ -67,10 +67,16 @@ import json
 import os
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
 
+from .build_rig import _diffuse, _laplacian
 from .errors import AutobonesError
+from .fit import mesh_parts
 from .muscles import muscles_from_rig
+from .weights import weld
 from .wire import wire_weights
 
 REGIONS_DEFAULT = ("scalp", "forehead", "brow", "eyelids", "nose", "cheeks", "lips", "chin", "jaw", "ears", "neck")
@@ -210,10 +216,6 @@ class ExpressionModel:
 
         # every graph operation runs on the mesh welded by position (unwelded heads, UV seams),
         # per-vertex results are read back through ``index``
-        from .build_rig import _laplacian
-        from .fit import mesh_parts
-        from .weights import weld
-
         # (only when the mesh falls apart without it: welding would also join eyelashes, eye
         # occlusion shells and teeth that touch the skin)
         face_area = 0.5 * np.linalg.norm(np.cross(Vc[F[:, 1]] - Vc[F[:, 0]], Vc[F[:, 2]] - Vc[F[:, 0]]), axis=1)
@@ -240,8 +242,6 @@ class ExpressionModel:
         N = Nw[index]
         self.normals_ = N
         # the offset skull is smooth: its directions are the skin normals smoothed over ~1 cm
-        import scipy.sparse as sp
-
         E0 = np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]])
         A0 = sp.csr_matrix((np.ones(2 * len(E0)), (np.r_[E0[:, 0], E0[:, 1]], np.r_[E0[:, 1], E0[:, 0]])), shape=(nw, nw))
         skin_w = np.zeros(nw, dtype=bool)
@@ -363,9 +363,6 @@ class ExpressionModel:
         self._unfold_weights = (Wu, np.asarray(Wu.sum(axis=1)).ravel())
         t_s = (float(model.get("smoothing", 0.012)) * fu) ** 2
         if t_s > 0:
-            import scipy.sparse as sp
-            from scipy.sparse.linalg import splu
-
             C = Lp.tocoo()
             off = C.row != C.col
             # an edge across the mouth line conducts less the more it lies in the mouth zone
@@ -401,11 +398,7 @@ class ExpressionModel:
                 if r_name in skull:
                     thick[region == r_i] = float(skull[r_name]) * fu
         # the offset skull is smooth: region thicknesses blend over ~1 cm of skin
-        from scipy.sparse.linalg import splu as _splu
-
-        Lp_, M_ = self._laplacian
-        self.thickness_ = _splu((M_ + (float(skull.get("blend", 0.1)) * fu) ** 2 * Lp_).tocsc()).solve(
-            M_ @ thick[first])[index]
+        self.thickness_ = _diffuse(thick[first], Lp, M, t=(float(skull.get("blend", 0.1)) * fu) ** 2)[index]
         # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
         # surfaces face each other) nor under skin whose normal points into the head
         self.clamp_ = (zone < 0.05) & ~inward
@@ -500,10 +493,7 @@ class ExpressionModel:
         # angle, so a weight that changes within a few of the eye corners' tiny triangles folds them
         t_l = (float(lid.get("smoothing", model.get("smoothing", 0.012))) * fu) ** 2
         if t_l > 0:
-            from scipy.sparse.linalg import splu
-
-            lu = splu((M + t_l * Lp).tocsc())
-            lw = lu.solve(np.asarray(M @ self.lid_weights_[:, first].T))[index].T
+            lw = _diffuse(self.lid_weights_[:, first].T, Lp, M, t=t_l)[index].T
             # diffusion reaches the whole skin with vanishing weights: the lids keep their own area
             self.lid_weights_ = np.where(lw > 1e-3, np.clip(lw, 0.0, 1.0), 0.0) * skin
         # the lid margins ride the eyeball: the muscles around (frontalis, zygomatics) stretch the
@@ -540,8 +530,6 @@ class ExpressionModel:
             j = names.index("jaw")
             # under the chin the jaw swings toward the neck: spread its weight there so the skin
             # stretches instead of folding (heat diffusion, as build_rig smooths it)
-            from .build_rig import _diffuse, _laplacian
-
             spread = float(model.get("jaw_spread", 0.15)) * fu
             jaw_s = (np.clip(_diffuse(W[first, j], *self._laplacian, t=spread ** 2), 0.0, 1.0)[index]
                      if spread > 0 else W[:, j])
@@ -826,8 +814,6 @@ class ExpressionModel:
         as one piece with the skin around it (:meth:`_rigid_patches`). Vertices away from folds
         keep their displacement exactly.
         """
-        from scipy.sparse.csgraph import connected_components
-
         A, _deg, skin_w, Fs, n0 = self._unfold_mesh
         Wu, wdeg = self._unfold_weights
         area = 0.5 * np.linalg.norm(n0, axis=1)
@@ -931,8 +917,6 @@ class ExpressionModel:
         bad = np.flatnonzero(self._folded(Vw + dw, Fs, n0))
         if not len(bad):
             return dw, moved
-        from scipy.sparse.csgraph import connected_components
-
         area = 0.5 * np.linalg.norm(n0, axis=1)
         reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
 
