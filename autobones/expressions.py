@@ -502,9 +502,11 @@ class ExpressionModel:
         self.muscle_basis_ *= (1.0 - hold)[None, :, None]
         for i in list(self.crease_basis_):
             self.crease_basis_[i] = self.crease_basis_[i] * (1.0 - hold)[:, None]
-        # small separate parts on the lids (eyelashes, eye-occlusion / tear-line shells): each of
-        # their vertices follows the skin vertex nearest it (its lid joints and muscle fields), so
-        # lashes ride their lid and a shell across the fissure closes with both lids
+        # small separate parts on the lids (eyelashes, eye-occlusion / tear-line shells) are held
+        # where they touch the skin: each of their vertices follows the skin under the nearest of
+        # its part's touching vertices (its lid joints and muscle fields), so a lash turns whole
+        # with the margin it grows from (its tip, nearest the lid skin above, would lag) and a
+        # shell across the fissure closes with both lids
         self.attached_ = np.zeros(n, dtype=bool)
         eye_w = sum((W[:, names.index(f"eye_{s}")] for s in "lr" if f"eye_{s}" in names), np.zeros(n))
         d_skin, near = tree.query(Vc)
@@ -517,6 +519,8 @@ class ExpressionModel:
                     or d_skin[rows].min() > 0.01 * fu or lid_any[near[rows]].max() < 0.1):
                 continue
             self.attached_[rows] = True
+            roots = rows[d_skin[rows] <= d_skin[rows].min() + 0.01 * fu]
+            near[rows] = near[roots[cKDTree(Vc[roots]).query(Vc[rows])[1]]]
         rows = np.flatnonzero(self.attached_)
         self.lid_weights_[:, rows] = self.lid_weights_[:, near[rows]]
         self.muscle_basis_[:, rows] = self.muscle_basis_[:, near[rows]]
@@ -567,21 +571,29 @@ class ExpressionModel:
             Wj[:, j] = jaw_new
             # the mouth's separate inner parts (teeth, gums, tongue) are carried by the mandible
             # below the occlusal plane and by the skull above it (taken level through the
-            # stomion): a small part (a tooth) rides one bone by its centre, a large one (gums
-            # with the tongue) splits vertex by vertex over a narrow band
+            # stomion): a small part (a tooth) rides one bone by its centre; a large one (gums
+            # with the tongue) splits vertex by vertex over a narrow band at the crowns of the lower
+            # teeth, when there are any (the lower gums and the tongue lie within the lower dental
+            # arch, up to its crowns), and behind the jaw joint stays with the skull (the pharynx)
             mouth = model.get("mouth_parts", {})
             reach = float(mouth.get("reach", 0.9)) * fu
             band = float(mouth.get("band", 0.03)) * fu
             rigid = float(mouth.get("rigid_size", 0.5)) * fu
             eye_w = sum((W[:, names.index(f"eye_{s_}")] for s_ in "lr" if f"eye_{s_}" in names), np.zeros(n))
             inner = ~skin & ~self.attached_ & (eye_w < 0.5)
+            found = []                                     # (rows, centre, small)
             for p_ in np.unique(part[inner]):
                 rows = np.flatnonzero((part == p_) & inner)
                 cen = Vc[rows].mean(axis=0)
-                if np.linalg.norm(cen - st) > reach or cen[2] > st[2]:
-                    continue
-                y = Vc[rows, 1] - st[1] if np.ptp(Vc[rows], axis=0).max() > rigid else np.full(len(rows), cen[1] - st[1])
-                jw = _ramp(y, band, -band)
+                if np.linalg.norm(cen - st) <= reach and cen[2] <= st[2]:
+                    found.append((rows, cen, np.ptp(Vc[rows], axis=0).max() <= rigid))
+            crowns = [Vc[rows, 1].max() for rows, cen, sm in found if sm and cen[1] < st[1]]
+            level = st[1] + max(0.0, max(crowns, default=st[1]) - st[1])
+            # behind the jaw joint: the pharynx, fixed to the skull
+            front = _ramp(Vc[:, 2] - self.pivots_[j][2], -band, band)
+            for rows, cen, sm in found:
+                y = np.full(len(rows), cen[1] - st[1]) if sm else Vc[rows, 1] - level
+                jw = _ramp(y, band, -band) * front[rows]
                 Wj[rows] = 0.0
                 Wj[rows, j] = jw
                 if "head" in names:
