@@ -513,6 +513,7 @@ class ExpressionModel:
         near = skin_idx[near]
         lid_any = self.lid_weights_.max(axis=0)
         att = float(lid.get("attached_part_size", 0.5)) * fu
+        on_lids = []                                        # (rows, touching rows) per part
         for p_ in np.unique(part[~skin]):
             rows = np.flatnonzero((part == p_) & ~skin)
             if (eye_w[rows].mean() >= 0.5 or np.ptp(Vc[rows], axis=0).max() > att
@@ -521,8 +522,17 @@ class ExpressionModel:
             self.attached_[rows] = True
             roots = rows[d_skin[rows] <= d_skin[rows].min() + 0.01 * fu]
             near[rows] = near[roots[cKDTree(Vc[roots]).query(Vc[rows])[1]]]
+            on_lids.append((rows, roots))
         rows = np.flatnonzero(self.attached_)
         self.lid_weights_[:, rows] = self.lid_weights_[:, near[rows]]
+        # a part rooted on one lid only (a row of lashes on its tarsal plate) turns as one piece
+        # with the margin, corners included; a part rooted on both (a shell across the
+        # fissure) stretches between them
+        for rows, roots in on_lids:
+            rw = self.lid_weights_[:, roots]
+            on_upper = np.mean(rw[:2].max(axis=0) >= rw[2:].max(axis=0))
+            if on_upper >= 0.9 or on_upper <= 0.1:
+                self.lid_weights_[:, rows] = rw.max(axis=1)[:, None]
         self.muscle_basis_[:, rows] = self.muscle_basis_[:, near[rows]]
         for i in list(self.crease_basis_):
             self.crease_basis_[i][rows] = self.crease_basis_[i][near[rows]]
