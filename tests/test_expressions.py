@@ -174,6 +174,50 @@ def test_eyelashes_and_eye_shells_follow_the_lids(model):
     assert not d[~att & ~m.skin_].any()
 
 
+def test_a_row_of_lashes_turns_as_one_piece(model):
+    """A lid part touching one lid only (ICT's lash rows) turns with that lid as one rigid piece,
+    its corners included; a part touching both lids (an eye-occlusion shell) stretches."""
+    rig, m = model("ict")
+    from autobones.fit import mesh_parts
+
+    parts = mesh_parts(len(rig.vertices), rig.faces)
+    V = m.pose_parameters(np.zeros(len(m.muscle_names_)), 0.0, [1.0, 1.0, 0.6, 0.6])
+    rigid, stretched = 0, 0
+    for p in np.unique(parts[m.attached_]):
+        rows = np.flatnonzero(parts == p)
+        E = rig.faces[np.isin(rig.faces, rows).all(axis=1)]
+        e0 = np.linalg.norm(rig.vertices[E[:, 0]] - rig.vertices[E[:, 1]], axis=1)
+        e1 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+        if np.ptp(m.lid_weights_[:, rows], axis=1).max() == 0.0:
+            rigid += 1
+            assert np.allclose(e0, e1, rtol=1e-9), p
+            assert np.linalg.norm(V[rows] - rig.vertices[rows], axis=1).min() > 0.0
+        else:
+            stretched += 1
+            assert np.abs(e1 / e0 - 1.0).max() > 1e-3, p
+    assert rigid >= 12 and stretched >= 4, (rigid, stretched)   # 2 x 6 lash rows; shells
+
+
+def test_the_mouth_inside_follows_icts_own_jaw(model):
+    """ICT's jawOpen turns its lower teeth, gums and tongue about a centre below and behind the
+    condyle and leaves the pharynx still: the model's jaw at ICT's 25 degrees reproduces the
+    mouth's inner parts to >= 90 % (the gums-and-tongue part splitting at the lower crowns, not
+    at the stomion: 78 %), and nothing behind the jaw joint moves."""
+    rig, m = model("ict")
+    from autobones.io.mesh import load_mesh
+
+    N0 = load_mesh(data("ict/generic_neutral_mesh.obj"))[0]
+    X = rig.vertices + (load_mesh(data("ict/jawOpen.obj"))[0] - N0)
+    V = m.pose(jaw_deg=25.0)
+    rows = m.mouth_parts_
+    D = X[rows] - rig.vertices[rows]
+    explained = 1.0 - np.linalg.norm(V[rows] - X[rows]) / np.linalg.norm(D)
+    assert explained >= 0.90, explained
+    j = m.bones_.index("jaw")
+    behind = rows[m.canonical_[rows, 2] < m.pivots_[j][2] - 0.03 * m.face_unit_]
+    assert len(behind) > 100 and not np.linalg.norm(V[behind] - rig.vertices[behind], axis=1).any()
+
+
 def test_teeth_ride_the_jaw_or_the_skull(model):
     """ICT's teeth are separate parts: the lower ones turn with the jaw as rigid bodies, the upper
     ones stay with the skull; the gums and tongue part splits at the occlusal plane."""
