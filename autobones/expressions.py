@@ -336,6 +336,10 @@ class ExpressionModel:
             # point constraint per control vertex: own locator (001 profile), neighbours, rest
             prof = np.where(t <= 1.0, np.sin(0.5 * np.pi * np.clip(t, 0, 1) ** 0.48),
                             np.cos(0.5 * np.pi * np.clip((t - 1.0) / 0.25, 0.0, 1.0)))
+            if "galea" in spec:
+                # the aponeurosis above the muscle is pulled along as one sheet: its own locator
+                # weighs fully from the wire's start over the galea down to the anchor
+                prof = np.where(t < float(spec["galea"]["anchor"]), 1.0, prof)
             cw = cross * infl[:, cv_idx].T                                   # (cvs, k)
             cw[:, i] = prof
             for j2 in range(k):                                   # neighbours pull from their own side only
@@ -346,7 +350,17 @@ class ExpressionModel:
                 sh = float(types.get(mj.types[j2], {}).get("shortening", 0.0))
                 if sh == 0.0:
                     continue
-                d = mj.locator_displacements(Q, j2) * (sh * cw[:, j2:j2 + 1])
+                g2 = types.get(mj.types[j2], {}).get("galea")
+                if g2 is None:
+                    d = mj.locator_displacements(Q, j2) * (sh * cw[:, j2:j2 + 1])
+                else:
+                    # a muscle without a bony origin (frontalis, on the galea aponeurotica, which
+                    # the occipitalis holds from behind): both ends move toward the point anchor
+                    # of the way origin -> insertion, and above the origin the aponeurosis goes
+                    # as one piece with it, so the scalp slides down toward a raised brow
+                    L_ = mj.insertions[j2] - mj.origins[j2]
+                    tq = (Q - mj.origins[j2]) @ L_ / (L_ @ L_)
+                    d = -(np.maximum(tq, 0.0) - float(g2["anchor"]))[:, None] * L_[None, :] * (sh * cw[:, j2:j2 + 1])
                 G[j2] += Wm @ d
             total += np.asarray(Wm.sum(axis=1)).ravel()
             self.wires_.append({"muscle": nm, "base": Q, "vertices": cv_idx, "dropoff": d0, "side": side})
