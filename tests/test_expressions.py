@@ -74,6 +74,24 @@ def test_muscle_contraction_scales_about_the_origin(model):
     assert np.allclose(mj.contract(mj.origins[i:i + 1], i, 0.5)[0], mj.origins[i])
 
 
+@pytest.mark.parametrize("name", ["default", "ict"])
+def test_frontalis_draws_the_scalp_down_toward_the_raised_brow(model, name):
+    """Frontalis has no bony origin (the galea): its contraction raises the brow and pulls the
+    skin above its origin down toward it, as ICT's browInnerUp_L does."""
+    rig, m = model(name)
+    mj = muscles_from_rig(rig)
+    i = mj.names.index("frontalis_inner_l")
+    o, ip = mj.origins[i], mj.insertions[i]
+    c = np.zeros(len(m.muscle_names_))
+    c[m.muscle_names_.index("frontalis_inner_l")] = 1.0
+    d = m.pose_parameters(c) - rig.vertices
+    u = (ip - o) / np.linalg.norm(ip - o)
+    brow, scalp = _nearest(rig, m, ip), _nearest(rig, m, o - 0.25 * (ip - o))
+    assert d[brow] @ u < -0.05 * m.shortening_[i] * np.linalg.norm(ip - o)      # the brow rises
+    assert d[scalp] @ u > 0.05 * m.shortening_[i] * np.linalg.norm(ip - o)      # the scalp comes down
+    assert np.linalg.norm(d[brow]) > np.linalg.norm(d[scalp])
+
+
 # ------------------------------------------------------------------------------ the model
 
 
