@@ -611,8 +611,10 @@ class ExpressionModel:
                 cen = Vc[rows].mean(axis=0)
                 if np.linalg.norm(cen - st) <= reach and cen[2] <= st[2]:
                     found.append((rows, cen, np.ptp(Vc[rows], axis=0).max() <= rigid))
-            crowns = [Vc[rows, 1].max() for rows, cen, sm in found if sm and cen[1] < st[1]]
-            level = st[1] + max(0.0, max(crowns, default=st[1]) - st[1])
+            # (a lower crown stands at most a little above the lips' line: a small part reaching
+            # higher is not a lower tooth)
+            tops = [Vc[rows, 1].max() - st[1] for rows, cen, sm in found if sm and cen[1] < st[1]]
+            level = st[1] + max([t_ for t_ in tops if t_ <= 0.1 * fu], default=0.0)
             # behind the jaw joint: the pharynx, fixed to the skull
             front = _ramp(Vc[:, 2] - self.pivots_[j][2], -band, band)
             for rows, cen, sm in found:
