@@ -542,11 +542,11 @@ class ExpressionModel:
         # a part rooted on one lid only (a row of lashes on its tarsal plate) turns as one piece
         # with the margin, corners included; a part rooted on both (a shell across the
         # fissure) stretches between them
-        for rows, roots in on_lids:
+        for part_rows, roots in on_lids:
             rw = self.lid_weights_[:, roots]
             on_upper = np.mean(rw[:2].max(axis=0) >= rw[2:].max(axis=0))
             if on_upper >= 0.9 or on_upper <= 0.1:
-                self.lid_weights_[:, rows] = rw.max(axis=1)[:, None]
+                self.lid_weights_[:, part_rows] = rw.max(axis=1)[:, None]
         self.muscle_basis_[:, rows] = self.muscle_basis_[:, near[rows]]
         for i in list(self.crease_basis_):
             self.crease_basis_[i][rows] = self.crease_basis_[i][near[rows]]

@@ -214,6 +214,10 @@ def test_a_row_of_lashes_turns_as_one_piece(model):
             stretched += 1
             assert np.abs(e1 / e0 - 1.0).max() > 1e-3, p
     assert rigid >= 12 and stretched >= 4, (rigid, stretched)   # 2 x 6 lash rows; shells
+    # and every such part follows the muscles of the skin it touches (a brow raise moves them)
+    for p in np.unique(parts[m.attached_]):
+        rows = np.flatnonzero(parts == p)
+        assert np.abs(m.muscle_basis_[:, rows]).max() > 0.0, p
 
 
 def test_the_mouth_inside_follows_icts_own_jaw(model):
