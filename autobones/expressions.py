@@ -615,10 +615,11 @@ class ExpressionModel:
             # higher is not a lower tooth)
             tops = [Vc[rows, 1].max() - st[1] for rows, cen, sm in found if sm and cen[1] < st[1]]
             level = st[1] + max([t_ for t_ in tops if t_ <= 0.1 * fu], default=0.0)
-            # behind the jaw joint: the pharynx, fixed to the skull (blended over +-pharynx fu: a
-            # sharper step turns the tongue's triangles over at the joint as the jaw opens)
-            ph = float(mouth.get("pharynx", 0.25)) * fu
-            front = _ramp(Vc[:, 2] - self.pivots_[j][2], -ph, ph)
+            # behind the jaw joint: the pharynx, fixed to the skull (held fully from pharynx fu behind
+            # the joint, free from twice that in front: a sharper step turns the tongue's triangles
+            # over at the joint as the jaw opens)
+            ph = float(mouth.get("pharynx", 0.1)) * fu
+            front = _ramp(Vc[:, 2] - self.pivots_[j][2], -ph, 2.0 * ph)
             for rows, cen, sm in found:
                 y = np.full(len(rows), cen[1] - st[1]) if sm else Vc[rows, 1] - level
                 jw = _ramp(y, band, -band) * front[rows]
