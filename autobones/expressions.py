@@ -8,8 +8,10 @@ influence fields, regions, skeleton and skin weights, landmarks):
    runs along the skin over the muscle (from part way up the muscle to just past
    its insertion). Each wire control vertex is point-constrained to a weighted
    average of locators: its muscle's locator (weight 001's force profile along the
-   muscle), the locators of the neighbouring muscles whose influence fields cover
-   it (weight: that field times ``cross_talk``) and one unparented rest locator.
+   muscle; frontalis, whose origin is the galea aponeurotica, scales about a point a
+   quarter of the way down and carries the scalp above with it), the locators of
+   the neighbouring muscles whose influence fields cover it (weight: that field
+   times ``cross_talk``) and one unparented rest locator.
    The point-constraint weights do not depend on the contractions, so the skin
    displacement is a fixed linear map of the contraction vector: one (n, 3) basis
    field per muscle. Where wires overlap, their dropoffs are normalised to sum to
@@ -30,9 +32,11 @@ influence fields, regions, skeleton and skin weights, landmarks):
    (so the skin there stretches); head and neck
    rotations blend by the rig's skin weights (linear blend skinning); eyeballs
    gaze through their eye bones (yaw/pitch, or an aim point). Separate small parts on
-   the lids (eyelashes, eye-occlusion shells) follow the skin vertex nearest them;
-   the mouth's separate inner parts (teeth, gums, tongue) ride the jaw below the
-   occlusal plane (level through the stomion) and the skull above it, teeth whole.
+   the lids follow the skin where they touch it (a row of lashes turns as one piece
+   with its margin, an eye-occlusion shell stretches between both lids); the mouth's
+   separate inner parts (teeth, gums, tongue) ride the jaw below the occlusal plane
+   and the skull above it, teeth whole, gums and tongue split at the lower crowns,
+   nothing behind the jaw joint (the pharynx).
 5. unfolding (beyond the seeds): skin triangles the lids or jaw turn over are relaxed
    (the displacement replaced by its neighbours' mean under the intrinsic Laplacian's
    weights, locally; each relaxed patch is kept only where it leaves less skin folded);
@@ -131,6 +135,13 @@ def _align(a, b):
         return _rot(1, 180.0)
     K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
     return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def x_turn(P, angle):
+    """Displacement (m, 3) of points ``P`` (m, 3), relative to a pivot, turned by ``angle``
+    (radians, scalar or (m,)) about the canonical +X axis (the lid and jaw joints' axis)."""
+    ca, sa = np.cos(angle), np.sin(angle)
+    return np.c_[np.zeros(len(P)), (ca - 1.0) * P[:, 1] - sa * P[:, 2], sa * P[:, 1] + (ca - 1.0) * P[:, 2]]
 
 
 def vertex_normals(V, F):
@@ -249,8 +260,8 @@ class ExpressionModel:
         Fs = Fw[skin_w[Fw].all(axis=1)]
         a_s = 0.5 * np.linalg.norm(np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]]), axis=1)
         Fs = Fs[a_s > 1e-9 * max(float(np.median(a_s)) if len(a_s) else 0.0, 1e-300)]
-        self._unfold_mesh = (A0.tocsr(), np.asarray(A0.sum(axis=1)).ravel(), skin_w, Fs,
-                             np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]]))
+        n0 = np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]])
+        self._unfold_mesh = (A0.tocsr(), skin_w, Fs, n0, 0.5 * np.linalg.norm(n0, axis=1))
         Ns = Nw.copy()
         for _ in range(int(model.get("skull_smoothing_passes", 10))):
             Ns = A0 @ Ns + Ns
@@ -350,17 +361,9 @@ class ExpressionModel:
                 sh = float(types.get(mj.types[j2], {}).get("shortening", 0.0))
                 if sh == 0.0:
                     continue
-                g2 = types.get(mj.types[j2], {}).get("galea")
-                if g2 is None:
-                    d = mj.locator_displacements(Q, j2) * (sh * cw[:, j2:j2 + 1])
-                else:
-                    # a muscle without a bony origin (frontalis, on the galea aponeurotica, which
-                    # the occipitalis holds from behind): both ends move toward the point anchor
-                    # of the way origin -> insertion, and above the origin the aponeurosis goes
-                    # as one piece with it, so the scalp slides down toward a raised brow
-                    L_ = mj.insertions[j2] - mj.origins[j2]
-                    tq = (Q - mj.origins[j2]) @ L_ / (L_ @ L_)
-                    d = -(np.maximum(tq, 0.0) - float(g2["anchor"]))[:, None] * L_[None, :] * (sh * cw[:, j2:j2 + 1])
+                # frontalis, on the galea: the scalp slides down toward a raised brow
+                anchor = types.get(mj.types[j2], {}).get("galea", {}).get("anchor")
+                d = mj.locator_displacements(Q, j2, anchor=anchor) * (sh * cw[:, j2:j2 + 1])
                 G[j2] += Wm @ d
             total += np.asarray(Wm.sum(axis=1)).ravel()
             self.wires_.append({"muscle": nm, "base": Q, "vertices": cv_idx, "dropoff": d0, "side": side})
@@ -603,7 +606,6 @@ class ExpressionModel:
             reach = float(mouth.get("reach", 0.9)) * fu
             band = float(mouth.get("band", 0.03)) * fu
             rigid = float(mouth.get("rigid_size", 0.5)) * fu
-            eye_w = sum((W[:, names.index(f"eye_{s_}")] for s_ in "lr" if f"eye_{s_}" in names), np.zeros(n))
             inner = ~skin & ~self.attached_ & (eye_w < 0.5)
             found = []                                     # (rows, centre, small)
             for p_ in np.unique(part[inner]):
@@ -855,9 +857,8 @@ class ExpressionModel:
         as one piece with the skin around it (:meth:`_rigid_patches`). Vertices away from folds
         keep their displacement exactly.
         """
-        A, _deg, skin_w, Fs, n0 = self._unfold_mesh
+        A, skin_w, Fs, n0, area = self._unfold_mesh
         Wu, wdeg = self._unfold_weights
-        area = 0.5 * np.linalg.norm(n0, axis=1)
         index, first = self._weld
         Vw = self.canonical_[first]
         dw = d[first].copy()
@@ -867,7 +868,7 @@ class ExpressionModel:
         last, stale, allowed = None, 0, None
         reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
         for _ in range(rounds):
-            bad = faces[self._folded(Vw + dw, Fs[faces], n0[faces])]
+            bad = faces[_turned(Vw + dw, Fs[faces], n0[faces])]
             amount = float(area[bad].sum())
             if last is None or amount < last:       # keep the state with the least folded area
                 best, best_touched = dw.copy(), touched.copy()
@@ -914,7 +915,7 @@ class ExpressionModel:
         comp = np.full(len(Vw), n_c)
         comp[T] = lab
         face_c = comp[Fs].min(axis=1)              # a face touches at most one patch
-        before, after = (np.bincount(face_c, weights=area * self._folded(Vw + q, Fs, n0), minlength=n_c + 1)
+        before, after = (np.bincount(face_c, weights=area * _turned(Vw + q, Fs, n0), minlength=n_c + 1)
                          for q in (d[first], best))
         undo = np.flatnonzero(after[:n_c] >= before[:n_c])
         if len(undo):
@@ -953,12 +954,11 @@ class ExpressionModel:
 
     def _rigid_sweep(self, Vw, dw, rings, feathers=(0, 1, 2, 4)):
         """One sweep of :meth:`_rigid_patches` over the clusters folded now."""
-        A, _deg, skin_w, Fs, n0 = self._unfold_mesh
+        A, skin_w, Fs, n0, area = self._unfold_mesh
         moved = np.zeros(len(Vw), dtype=bool)
-        bad = np.flatnonzero(self._folded(Vw + dw, Fs, n0))
+        bad = np.flatnonzero(_turned(Vw + dw, Fs, n0))
         if not len(bad):
             return dw, moved
-        area = 0.5 * np.linalg.norm(n0, axis=1)
         reach = float(self.doc_["model"].get("unfold_reach", 0.25)) * self.face_unit_
 
         def grow(mask):
@@ -993,7 +993,7 @@ class ExpressionModel:
                 for fe in feathers:
                     near = shells[fe + 1]
                     local = np.flatnonzero(near[Fs].any(axis=1))
-                    before = float((area[local] * self._folded(Vw + dw, Fs[local], n0[local])).sum())
+                    before = float((area[local] * _turned(Vw + dw, Fs[local], n0[local])).sum())
                     alpha = np.zeros(len(Vw))
                     for k in range(fe + 1):      # 1 on the core, fading over the feather rings
                         alpha[shells[k] & (alpha == 0)] = 1.0 - k / (fe + 1.0)
@@ -1002,7 +1002,7 @@ class ExpressionModel:
                         q = dw.copy()
                         target = (Vw[rows] - mx) @ Mm.T + my - Vw[rows]
                         q[rows] = alpha[rows, None] * target + (1.0 - alpha[rows, None]) * dw[rows]
-                        amount = float((area[local] * self._folded(Vw + q, Fs[local], n0[local])).sum())
+                        amount = float((area[local] * _turned(Vw + q, Fs[local], n0[local])).sum())
                         if before - amount > best_gain:
                             best_gain, best_q = before - amount, (rows, q[rows])
                         if amount == 0.0 and before > 0.0:
@@ -1017,11 +1017,6 @@ class ExpressionModel:
                 dw[best_q[0]] = best_q[1]
                 moved[best_q[0]] = True
         return dw, moved
-
-    @staticmethod
-    def _folded(P, F, n0):
-        """(m,) bool: triangles ``F`` at positions ``P`` whose normal turned from ``n0`` by over 90 degrees."""
-        return (n0 * np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])).sum(axis=1) <= 0
 
     def _bones(self, d, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None, head_deg=None, neck_deg=None,
                unfold=False):
@@ -1042,10 +1037,7 @@ class ExpressionModel:
             ang = np.radians(self.lid_close_deg_[e]) * lids[q] * w[rows]
             if q >= 2:
                 ang = -self.lid_lower_range_ * ang
-            P = Vc[rows] + d[rows] - self.lid_pivots_[e]
-            ca, sa = np.cos(ang), np.sin(ang)
-            d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
-            d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
+            d[rows] += x_turn(Vc[rows] + d[rows] - self.lid_pivots_[e], ang)
         # bones: neck -> head -> {jaw, eyes}, linear blend skinning with the sharpened jaw weights
         # the jaw turns each vertex about its pivot by its weight times the angle (blending the
         # angle, not the positions: linear blending would pull half-weighted skin under the chin
@@ -1057,10 +1049,7 @@ class ExpressionModel:
             j = self.bones_.index("jaw")
             rows = np.flatnonzero(W[:, j] > 0)
             ang = np.radians(float(jaw_deg)) * W[rows, j]
-            P = Vc[rows] + d[rows] - self.pivots_[j]
-            ca, sa = np.cos(ang), np.sin(ang)
-            d[rows, 1] += (ca - 1.0) * P[:, 1] - sa * P[:, 2]
-            d[rows, 2] += sa * P[:, 1] + (ca - 1.0) * P[:, 2]
+            d[rows] += x_turn(Vc[rows] + d[rows] - self.pivots_[j], ang)
             # the condyle glides down and forward along the articular eminence as the jaw opens
             glide = self.jaw_glide_ * float(jaw_deg)
             if np.any(glide):
@@ -1139,6 +1128,10 @@ def flipped_faces(V0, V1, F, min_area=0.0):
     not above ``min_area`` (units of V0 squared; degenerate ones at the default 0) never count.
     """
     n0 = np.cross(V0[F[:, 1]] - V0[F[:, 0]], V0[F[:, 2]] - V0[F[:, 0]])
-    n1 = np.cross(V1[F[:, 1]] - V1[F[:, 0]], V1[F[:, 2]] - V1[F[:, 0]])
-    ok = 0.5 * np.linalg.norm(n0, axis=1) > min_area
-    return ok & ((n0 * n1).sum(axis=1) <= 0)
+    return (0.5 * np.linalg.norm(n0, axis=1) > min_area) & _turned(V1, F, n0)
+
+
+def _turned(P, F, n0):
+    """(m,) bool: triangles ``F`` at positions ``P`` whose normal turned from the rest normals
+    ``n0`` (m, 3) by over 90 degrees."""
+    return (n0 * np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])).sum(axis=1) <= 0

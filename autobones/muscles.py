@@ -64,7 +64,7 @@ class MuscleJoints:
         return MuscleJoints(list(self.names), list(self.types), list(self.sides), fn(self.origins),
                             fn(self.insertions), self.widths * scale)
 
-    def locator_displacements(self, Q, muscle):
+    def locator_displacements(self, Q, muscle, anchor=None):
         """Unit-contraction displacement of locators riding one muscle joint.
 
         Parameters
@@ -73,15 +73,27 @@ class MuscleJoints:
             Locator rest positions (same frame as the joints).
         muscle : int
             Muscle index.
+        anchor : float, optional
+            For a muscle without a bony origin (frontalis, on the galea aponeurotica, which
+            the occipitalis holds from behind): the joint scales about the point ``anchor``
+            of the way origin -> insertion instead of the origin, and locators above the
+            origin (the aponeurosis) move as one piece with it.
 
         Returns
         -------
         (p, 3) float
-            Displacement per unit shortening: ``-((q - o) . u) u``; multiply by the
-            shortening fraction s.
+            Displacement per unit shortening: ``-((q - o) . u) u``, or with an anchor
+            ``-(max(t, 0) - anchor) (i - o)`` where ``t`` is the locator's fraction of the way
+            origin ``o`` -> insertion ``i``; multiply by the shortening fraction s.
         """
-        o, u = self.origins[muscle], self.directions[muscle]
-        return -((np.asarray(Q, dtype=np.float64) - o) @ u)[:, None] * u[None, :]
+        Q = np.asarray(Q, dtype=np.float64)
+        o = self.origins[muscle]
+        if anchor is None:
+            u = self.directions[muscle]
+            return -((Q - o) @ u)[:, None] * u[None, :]
+        L = self.insertions[muscle] - o
+        t = (Q - o) @ L / (L @ L)
+        return -(np.maximum(t, 0.0) - float(anchor))[:, None] * L[None, :]
 
     def contract(self, Q, muscle, shortening):
         """Locators ``Q`` (p, 3) moved by a contraction of ``muscle`` shortening it by the

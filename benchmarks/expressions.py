@@ -352,14 +352,14 @@ def rotation_ceiling(model, X, pivot, degrees, glide=None):
     glide) to match the target positions ``X`` (n, 3, input frame). Free per-vertex angles are
     any weight field a joint could have, so this bounds what that joint can explain.
     Returns the fitted positions (n, 3), input frame."""
+    from autobones.expressions import x_turn
+
     Vc = model.canonical_
     D = model.frame_.to_canonical(X) - Vc
     P = Vc - pivot
     best, res = np.zeros_like(Vc), np.linalg.norm(D, axis=1)
     for a in degrees:
-        t = np.radians(a)
-        d = np.c_[np.zeros(len(P)), (np.cos(t) - 1) * P[:, 1] - np.sin(t) * P[:, 2],
-                  np.sin(t) * P[:, 1] + (np.cos(t) - 1) * P[:, 2]]
+        d = x_turn(P, np.radians(a))
         if glide is not None:
             d = d + a * glide[None, :]
         r = np.linalg.norm(D - d, axis=1)

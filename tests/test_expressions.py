@@ -41,6 +41,13 @@ def _nearest(rig, model, point):
     return idx[cKDTree(rig.vertices[idx]).query(np.asarray(point, dtype=np.float64))[1]]
 
 
+def _part_edges(rig, V, rows):
+    """Edge lengths (rest, posed) of the faces whose corners are all in the (n,) bool ``rows``."""
+    E = rig.faces[rows[rig.faces].all(axis=1)]
+    return (np.linalg.norm(rig.vertices[E[:, 0]] - rig.vertices[E[:, 1]], axis=1),
+            np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))
+
+
 # ------------------------------------------------------------------------------ wire, muscles
 
 
@@ -72,6 +79,20 @@ def test_muscle_contraction_scales_about_the_origin(model):
     q = mj.contract(mj.insertions[i:i + 1], i, 0.25)[0]
     assert np.allclose(q, mj.origins[i] + 0.75 * (mj.insertions[i] - mj.origins[i]))
     assert np.allclose(mj.contract(mj.origins[i:i + 1], i, 0.5)[0], mj.origins[i])
+
+
+def test_a_muscle_on_an_aponeurosis_scales_about_its_anchor(model):
+    """With an anchor (frontalis on the galea) the anchor point stays, the insertion moves toward
+    it, and a locator above the origin moves with the origin as one piece."""
+    rig, _ = model("default")
+    mj = muscles_from_rig(rig)
+    i = mj.names.index("frontalis_inner_l")
+    o, ins = mj.origins[i], mj.insertions[i]
+    L = ins - o
+    D = mj.locator_displacements(np.array([o + 0.25 * L, ins, o - 0.3 * L, o]), i, anchor=0.25)
+    assert np.allclose(D, [np.zeros(3), -0.75 * L, 0.25 * L, 0.25 * L])
+    assert np.array_equal(mj.locator_displacements(ins[None], i, anchor=None),
+                          mj.locator_displacements(ins[None], i))
 
 
 @pytest.mark.parametrize("name", ["default", "ict"])
@@ -203,9 +224,7 @@ def test_a_row_of_lashes_turns_as_one_piece(model):
     rigid, stretched = 0, 0
     for p in np.unique(parts[m.attached_]):
         rows = np.flatnonzero(parts == p)
-        E = rig.faces[np.isin(rig.faces, rows).all(axis=1)]
-        e0 = np.linalg.norm(rig.vertices[E[:, 0]] - rig.vertices[E[:, 1]], axis=1)
-        e1 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+        e0, e1 = _part_edges(rig, V, parts == p)
         if np.ptp(m.lid_weights_[:, rows], axis=1).max() == 0.0:
             rigid += 1
             assert np.allclose(e0, e1, rtol=1e-9), p
@@ -263,9 +282,7 @@ def test_teeth_ride_the_jaw_or_the_skull(model):
         assert (w[0] == 0.0) == above
         assert (d[rows].max() == 0.0) == above
         if not above:   # a rigid body: its edge lengths are kept
-            E = rig.faces[rows[rig.faces].all(axis=1)]
-            e0 = np.linalg.norm(rig.vertices[E[:, 0]] - rig.vertices[E[:, 1]], axis=1)
-            e1 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+            e0, e1 = _part_edges(rig, V, rows)
             assert np.allclose(e0, e1, rtol=1e-6)
 
 
