@@ -10,26 +10,34 @@ Public API::
 """
 __version__ = "0.1.0"
 
+import importlib.util as _util
+import os as _os
+
+# Installed, cli/ and generic_rig/ are subpackages (pyproject's package-dir); in a source checkout
+# that is not installed they sit beside this folder. Let such a checkout import them the same way.
+if _util.find_spec(__name__ + ".generic_rig") is None:
+    __path__.append(_os.path.dirname(_os.path.dirname(_os.path.abspath(__file__))))
+
 from .errors import AutobonesError
 from .io.mesh import load_mesh
 from .orient import Frame, detect_frame
-from .place import place
+from .placement.pipeline import place
 from .rig import Rig
 from .skeleton import Skeleton
-from .transfer import transfer
-from .attributes import transfer_attributes
-from .labelled_rig import LabelledRig
-from .detect import detect_landmarks
-from .expressions import ExpressionModel
-from .load import load_rig
+from .rig_transfer.pipeline import transfer
+from .rig_transfer.fields import transfer_attributes
+from .rig_transfer.labelled_rig import LabelledRig
+from .landmarks.detect import detect_landmarks
+from .expressions.model import ExpressionModel
+from .io.rig_files import load_rig
 
 
 def build_rig(base, landmarks, **kwargs):
     """A labelled generic rig from a base head (path or (V, F)) and its landmarks (path or dict);
     see :func:`autobones.build_rig.build_rig`."""
-    from .build_rig import build_rig as _build
+    from .rig_transfer.build import build_rig as _build
     from .io.landmarks import resolve_landmarks
-    from .place import resolve_mesh
+    from .placement.pipeline import resolve_mesh
 
     V, F, _ = resolve_mesh(base)
     lm, _ = resolve_landmarks(landmarks)

@@ -59,7 +59,7 @@ def make_options(transfer=False, density="medium", rig=None, random_state=0, exp
     ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
     when set, so other batches keep their options hash.
     """
-    from .facial import DENSITIES, bone_count
+    from .placement.facial_bones import DENSITIES, bone_count
 
     if transfer:
         return {"mode": "transfer", "density": None,

@@ -37,7 +37,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
-from .sample import sample_surface
+from .geometry.sample import sample_surface
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
@@ -213,7 +213,7 @@ def _cut_cues(V, F):
     """What a cut looks like, computed once: face centroids, unit normals and areas, and the
     open rim (edges with one face, after welding by position so unwelded meshes have none
     spurious) as midpoints and lengths."""
-    from .weights import weld
+    from .geometry.topology import weld
 
     T = V[F]
     cross = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
@@ -318,7 +318,7 @@ def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
 @lru_cache(maxsize=1)
 def default_reference():
     """Canonical sample of the built-in default head (cached; read-only)."""
-    from generic_rig import default_head_path
+    from .generic_rig import default_head_path
     from .io.mesh import load_mesh
 
     V, F = load_mesh(default_head_path())

@@ -10,7 +10,7 @@ import numpy as np
 from .errors import AutobonesError
 from .io.atomic import output_folder, temp_beside
 from .io.gltf import write_glb
-from .segment import LABEL_NAMES
+from .placement.segment import LABEL_NAMES
 from .skeleton import Skeleton
 
 
@@ -114,7 +114,7 @@ class Rig:
         those; ``pose`` and ``save`` then use it. None: the model already built, else one with the
         definitions a loaded rig's sidecar kept (``extra['expressions']['definitions']``), else
         ``generic_rig/expressions.json``."""
-        from .expressions import ExpressionModel
+        from .expressions.model import ExpressionModel
 
         cached = self.__dict__.get("_expression_model")
         if definitions is None:
@@ -143,8 +143,8 @@ class Rig:
         mesh units) and those ``skipped`` as all zero on this head."""
         if not self.extra.get("muscles"):
             return None
-        from .expressions import load_expressions
-        from .morph_targets import definitions_digest
+        from .expressions.model import load_expressions
+        from .expressions.morph_targets import definitions_digest
 
         model = self.__dict__.get("_expression_model")
         doc = model.doc_ if model is not None else load_expressions(
@@ -182,7 +182,7 @@ class Rig:
         output_folder(path)
         morphs, skipped = [], []
         if expressions is not False and expressions is not None:
-            from .morph_targets import au_morph_targets
+            from .expressions.morph_targets import au_morph_targets
 
             morphs, skipped = au_morph_targets(self.expression_model(), expressions)
         record = self.expression_record(morphs, skipped)

@@ -76,10 +76,11 @@ from pathlib import Path
 
 import numpy as np
 
-from autobones.fit import dense_correspondence, mesh_parts
+from autobones.rig_transfer.correspondence import dense_correspondence
+from autobones.geometry.topology import mesh_parts
 from autobones.io.mesh import load_mesh
-from autobones.stick import stick
-from autobones.tps import ThinPlateSpline, landmark_arrays
+from autobones.rig_transfer.stick import stick
+from autobones.geometry.tps import ThinPlateSpline, landmark_arrays
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 HEADS = ["generic_neutral_mesh", "identity000", "identity001", "identity002"]

@@ -103,7 +103,7 @@ import scipy.sparse as sp
 import autobones
 from autobones.io.gltf import top_influences
 from autobones.io.mesh import load_mesh
-from autobones.fit import mesh_parts
+from autobones.geometry.topology import mesh_parts
 
 ICT = Path(__file__).resolve().parents[2] / "shared" / "data" / "ict"
 NEUTRAL = ICT / "generic_neutral_mesh.obj"
@@ -341,7 +341,7 @@ def copy_through(P_src, P_dst, gF, V_src, F_src, D_src, V_dst):
     target; it takes the source displacement at its point (barycentric on the source triangle),
     and each target vertex takes the displacement at its closest point on the generic mesh laid
     on the target (P_dst, gF). Returns (n_dst, 3)."""
-    from autobones.transfer import ride
+    from autobones.rig_transfer.pipeline import ride
 
     return ride(V_dst, P_dst, gF, ride(P_src, V_src, F_src, D_src))
 
@@ -352,7 +352,7 @@ def rotation_ceiling(model, X, pivot, degrees, glide=None):
     glide) to match the target positions ``X`` (n, 3, input frame). Free per-vertex angles are
     any weight field a joint could have, so this bounds what that joint can explain.
     Returns the fitted positions (n, 3), input frame."""
-    from autobones.expressions import x_turn
+    from autobones.expressions.model import x_turn
 
     Vc = model.canonical_
     D = model.frame_.to_canonical(X) - Vc
@@ -393,8 +393,8 @@ def region_scores(Y, X, V, masks):
 
 def full_rig_benchmark(source="identity002", targets=("identity000", "identity001"), refine=30):
     """Parts 1 and 2 of the proof; prints its table and returns the lines."""
-    from autobones.expressions import ExpressionModel
-    from autobones.transfer import load_generic
+    from autobones.expressions.model import ExpressionModel
+    from autobones.rig_transfer.pipeline import load_generic
 
     N0, F = load_mesh(NEUTRAL)
     E = {}

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-from autobones.transfer import load_generic, ride
+from autobones.rig_transfer.pipeline import load_generic, ride
 
 ROOT = Path(__file__).resolve().parents[1]
 ICT = ROOT.parent / "shared" / "data" / "ict"

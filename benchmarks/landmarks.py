@@ -69,8 +69,8 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-import autobones.detect as detect_mod
-from autobones.detect import LandmarkDetector
+import autobones.landmarks.detect as detect_mod
+from autobones.landmarks.detect import LandmarkDetector
 from autobones.errors import AutobonesError
 from autobones.io.landmarks import IBUG68, NAMES, read_landmarks
 from autobones.io.mesh import load_mesh
@@ -238,7 +238,7 @@ def rig_on(V, F, lm):
     """As benchmarks/transfer.py: a sparse placed rig with a smooth field and 12 regions."""
     from sklearn.cluster import KMeans
 
-    from autobones.labelled_rig import LabelledRig
+    from autobones.rig_transfer.labelled_rig import LabelledRig
 
     placed = autobones.place((V, F), density="sparse")
     fields = {"scalar": np.sin(V[:, 1] / 8) + 0.5 * np.cos(V[:, 0] / 6) + V[:, 2] / 20,
@@ -468,7 +468,7 @@ def main(argv=None):
           f"({worst}); {secs:.2f} s -> {'OK' if not lm.flagged and not lm.dropped and lm.frame.front == '-x' else 'NOT OK'}")
 
     # ---- transfer ----------------------------------------------------------
-    from autobones.fit import mesh_parts
+    from autobones.geometry.topology import mesh_parts
 
     ict = [h for h in ICT if h in heads]
     pairs = list(itertools.permutations(ict, 2))

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-from autobones.expressions import ExpressionModel
-from autobones.morph_targets import au_morph_targets
+from autobones.expressions.model import ExpressionModel
+from autobones.expressions.morph_targets import au_morph_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 ICT = ROOT.parent / "shared" / "data" / "ict"

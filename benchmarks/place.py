@@ -101,7 +101,7 @@ def stand_in_reference(V, F):
     """Canonical sample of the source head, used by ``orient`` when the built-in default
     head (``generic_rig/default_head.obj``) is not there. LeePerrySmith is +Y up, +Z front."""
     from autobones.orient import SAMPLE_COUNT
-    from autobones.sample import sample_surface
+    from autobones.geometry.sample import sample_surface
 
     P, _, _ = sample_surface(V - V.mean(axis=0), F, SAMPLE_COUNT, seed=1)
     P = P - P.mean(axis=0)
@@ -111,7 +111,7 @@ def stand_in_reference(V, F):
 
 
 def default_head_present():
-    from generic_rig import default_head_path
+    from autobones.generic_rig import default_head_path
 
     return os.path.isfile(default_head_path())
 
@@ -341,7 +341,7 @@ def main(argv=None):
 
     sizes = list(QUICK) if args.quick else sorted(int(s.replace("_", "")) for s in args.sizes.split(","))
     from autobones.io.mesh import load_mesh
-    import autobones.facial
+    import autobones.placement.facial_bones
 
     n_bones = autobones.facial.bone_count(args.density)
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")

@@ -44,7 +44,7 @@ ROOT = HERE.parent
 DATA = ROOT.parent / "shared" / "data"
 sys.path.insert(0, str(ROOT))
 
-from autobones.detect import symmetry_plane  # noqa: E402  (the landmarks' mirror plane)
+from autobones.landmarks.detect import symmetry_plane  # noqa: E402  (the landmarks' mirror plane)
 from autobones.orient import reflect  # noqa: E402
 
 HEADS = {  # name: (mesh or None for the default head, landmark file)
@@ -103,8 +103,8 @@ def symmetric_bumps(V, muscles, plane, width):
 def measure(name, mesh, marks):
     """One row of the table (a dict) for one head."""
     import autobones
-    from autobones.expressions import ExpressionModel
-    from autobones.transfer import load_generic
+    from autobones.expressions.model import ExpressionModel
+    from autobones.rig_transfer.pipeline import load_generic
 
     t0 = time.perf_counter()
     details = {}

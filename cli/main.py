@@ -102,7 +102,7 @@ def _pose_epilog():
     import json
 
     try:
-        from generic_rig import expressions_path
+        from autobones.generic_rig import expressions_path
 
         with open(expressions_path(), encoding="utf-8") as fh:
             doc = json.load(fh)
@@ -418,7 +418,7 @@ def cmd_pose(args):
 def cmd_landmarks(args):
     import autobones
     from autobones.io.landmarks import read_landmarks, validate_landmarks, write_landmarks
-    from autobones.preview import save_preview
+    from autobones.landmarks.preview import save_preview
 
     t = time.perf_counter()
     V, F = autobones.load_mesh(args.head)

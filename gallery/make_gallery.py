@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-from autobones import render
+from autobones.render import rasterize as render
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parent.parent / "shared" / "data"
@@ -116,7 +116,7 @@ def landmark_picture(name, out):
     """Write ``landmarks_detected_<name>.png`` or ``landmarks_given_<name>.png`` into ``out``."""
     from autobones.io.landmarks import read_landmarks
     from autobones.io.mesh import load_mesh
-    from autobones.preview import save_preview
+    from autobones.landmarks.preview import save_preview
 
     path = Path(out) / f"{name}.png"
     if name.startswith("landmarks_detected_"):
@@ -137,7 +137,7 @@ def landmark_picture(name, out):
 
 def expression_picture(name, out, size=360):
     """``expressions_<name>.png``: neutral and the six emotions side by side, front view."""
-    from autobones.expressions import ExpressionModel
+    from autobones.expressions.model import ExpressionModel
 
     mesh, marks = EXPRESSION_HEADS[name]
     marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks

@@ -20,7 +20,7 @@ ROOT = os.path.dirname(HERE)
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
-from autobones.build_rig import REGIONS, build_rig  # noqa: E402
+from autobones.rig_transfer.build import REGIONS, build_rig  # noqa: E402
 from autobones.io.landmarks import read_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
 
@@ -52,7 +52,7 @@ def jaw_colors(w):
 
 
 def render(rig, path):
-    from autobones.render import render_views, save_png
+    from autobones.render.rasterize import render_views, save_png
 
     V, F = rig.vertices, rig.faces
     segs = [rig.skeleton.segments]

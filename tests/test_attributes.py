@@ -5,7 +5,7 @@ import fast_simplification
 import numpy as np
 import pytest
 
-from autobones.attributes import inpaint, sample_fields, transfer_attributes
+from autobones.rig_transfer.fields import inpaint, sample_fields, transfer_attributes
 from autobones.io.mesh import load_mesh
 
 from shared_data import data, icosphere

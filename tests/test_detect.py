@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 import autobones
-from autobones.detect import (DetectedLandmarks, LandmarkDetector, MEDIAPIPE_POINTS, lift, refine,
+from autobones.landmarks.detect import (DetectedLandmarks, LandmarkDetector, MEDIAPIPE_POINTS, lift, refine,
                               symmetry_plane, weighted_median)
 from autobones.errors import AutobonesError
 from autobones.io.landmarks import NAMES, mirror_name, read_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.place import default_head
+from autobones.placement.pipeline import default_head
 from shared_data import ROOT, data
 
 CLI = [sys.executable, "-m", "cli.main"]
@@ -143,7 +143,7 @@ def test_scan_landmarks_match_the_published_ones():
 
 
 def test_detected_landmarks_are_on_the_surface_and_left_is_left(ict):
-    from autobones.stick import closest_points
+    from autobones.geometry.closest import closest_points
 
     V, F, _, found = ict
     P = np.array(list(found.values()))
@@ -211,7 +211,7 @@ def test_face_only_scan_is_never_read_from_the_inside():
 
 
 def test_implausible_landmarks_are_refused():
-    from autobones.detect import plausible
+    from autobones.landmarks.detect import plausible
     from autobones.orient import Frame
 
     frame = Frame(rotation=np.eye(3), origin=np.zeros(3), size=1.0)
@@ -228,7 +228,7 @@ def test_implausible_landmarks_are_refused():
 
 
 def test_missing_detector_names_the_extra(monkeypatch):
-    from autobones import detect
+    from autobones.landmarks import detect
 
     monkeypatch.setitem(sys.modules, "mediapipe", None)
     monkeypatch.setitem(sys.modules, "mediapipe.python", None)
@@ -239,7 +239,7 @@ def test_missing_detector_names_the_extra(monkeypatch):
 
 def test_views_that_disagree_drop_the_name():
     """A detector that puts one point in a different place in every view: that name is dropped."""
-    from autobones.detect import MediaPipeFaceMesh
+    from autobones.landmarks.detect import MediaPipeFaceMesh
 
     real = MediaPipeFaceMesh()
     calls = itertools.count()

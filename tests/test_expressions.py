@@ -7,9 +7,9 @@ from scipy.spatial import cKDTree
 
 import autobones
 from autobones.errors import AutobonesError
-from autobones.expressions import ExpressionModel, flipped_faces, load_expressions
-from autobones.muscles import muscles_from_rig
-from autobones.wire import WireDeformer, dropoff, wire_weights
+from autobones.expressions.model import ExpressionModel, flipped_faces, load_expressions
+from autobones.expressions.muscles import muscles_from_rig
+from autobones.expressions.wires import WireDeformer, dropoff, wire_weights
 
 from shared_data import ROOT, data
 
@@ -196,7 +196,7 @@ def test_eyelashes_and_eye_shells_follow_the_lids(model):
     """ICT's eyelashes and eye-occlusion shells are separate small parts: they close with the lid
     skin they sit on, and nothing else that is not skin (eyeballs, teeth) moves with the lids."""
     rig, m = model("ict")
-    from autobones.fit import mesh_parts
+    from autobones.geometry.topology import mesh_parts
 
     parts = mesh_parts(len(rig.vertices), rig.faces)
     att = m.attached_
@@ -217,7 +217,7 @@ def test_a_row_of_lashes_turns_as_one_piece(model):
     """A lid part touching one lid only (ICT's lash rows) turns with that lid as one rigid piece,
     its corners included; a part touching both lids (an eye-occlusion shell) stretches."""
     rig, m = model("ict")
-    from autobones.fit import mesh_parts
+    from autobones.geometry.topology import mesh_parts
 
     parts = mesh_parts(len(rig.vertices), rig.faces)
     V = m.pose_parameters(np.zeros(len(m.muscle_names_)), 0.0, [1.0, 1.0, 0.6, 0.6])
@@ -264,7 +264,7 @@ def test_teeth_ride_the_jaw_or_the_skull(model):
     """ICT's teeth are separate parts: the lower ones turn with the jaw as rigid bodies, the upper
     ones stay with the skull; the gums and tongue part splits at the occlusal plane."""
     rig, m = model("ict")
-    from autobones.fit import mesh_parts
+    from autobones.geometry.topology import mesh_parts
 
     parts = mesh_parts(len(rig.vertices), rig.faces)
     j = m.bones_.index("jaw")

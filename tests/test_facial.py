@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from autobones.errors import AutobonesError
-from autobones.facial import DENSITIES, FacialBones, bone_count
+from autobones.placement.facial_bones import DENSITIES, FacialBones, bone_count
 
 MIRROR = np.array([-1.0, 1.0, 1.0])
 

@@ -5,10 +5,11 @@ import numpy as np
 import pytest
 
 from autobones.errors import AutobonesError
-from autobones.fit import boundary_vertices, dense_correspondence, mesh_parts
+from autobones.rig_transfer.correspondence import dense_correspondence
+from autobones.geometry.topology import boundary_vertices, mesh_parts
 from autobones.io.mesh import load_mesh
-from autobones.stick import stick
-from autobones.tps import ThinPlateSpline, landmark_arrays
+from autobones.rig_transfer.stick import stick
+from autobones.geometry.tps import ThinPlateSpline, landmark_arrays
 
 from shared_data import data, icosphere
 

@@ -90,8 +90,8 @@ def test_outputs_are_not_owner_only(tmp_path):
 
     import autobones
     from autobones.io.landmarks import read_landmarks, write_landmarks
-    from autobones.preview import save_preview
-    from generic_rig import default_head_path
+    from autobones.landmarks.preview import save_preview
+    from autobones.generic_rig import default_head_path
 
     old = os.umask(0o022)
     try:

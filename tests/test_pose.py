@@ -18,9 +18,9 @@ import trimesh
 
 import autobones
 from autobones.errors import AutobonesError
-from autobones.expressions import load_expressions
+from autobones.expressions.model import load_expressions
 from autobones.io.gltf import read_accessor, read_glb
-from autobones.morph_targets import definitions_digest
+from autobones.expressions.morph_targets import definitions_digest
 from autobones.rig import sidecar_paths
 
 from shared_data import ROOT, data, run_blender_check
@@ -292,7 +292,7 @@ def test_blender_imports_the_targets_as_shape_keys_that_move_the_skin_as_written
 
 
 def _cli(args, cwd, capsys):
-    from cli.main import main
+    from autobones.cli.main import main
 
     old = os.getcwd()
     os.chdir(cwd)
@@ -376,7 +376,7 @@ def test_cli_pose_help_teaches_the_aus_emotions_and_units(tmp_path):
 def test_a_rig_with_its_own_definitions_saves_and_loads_with_them(tmp_path):
     import copy
 
-    from autobones.expressions import ExpressionModel
+    from autobones.expressions.model import ExpressionModel
 
     doc = copy.deepcopy(DOC)
     doc["action_units"]["12"]["muscles"] = {"zygomaticus_major": 0.5}

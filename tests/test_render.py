@@ -6,7 +6,7 @@ import pytest
 import trimesh
 
 from autobones.errors import AutobonesError
-from autobones.render import (
+from autobones.render.rasterize import (
     Camera, RenderBuffers, draw_points, draw_segments, look_at, orthographic_camera,
     rasterize, render_views, save_png, shade, surface_points,
 )

@@ -3,7 +3,7 @@ import numpy as np
 
 from autobones.io.mesh import load_mesh
 from autobones.orient import detect_frame
-from autobones.segment import BACK, FACE, MIDDLE, _carry, segment_head
+from autobones.placement.segment import BACK, FACE, MIDDLE, _carry, segment_head
 
 from shared_data import data
 

@@ -5,7 +5,8 @@ import pytest
 
 from autobones.errors import AutobonesError
 from autobones.io.mesh import load_mesh
-from autobones.stick import barycentric, stick
+from autobones.rig_transfer.stick import stick
+from autobones.geometry.closest import barycentric
 
 from shared_data import data, icosphere
 

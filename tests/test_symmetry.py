@@ -11,11 +11,12 @@ import pytest
 from scipy.spatial import cKDTree
 
 import autobones
-from autobones.detect import symmetry_plane
-from autobones.expressions import ExpressionModel
-from autobones.fit import axis_turn, dense_correspondence
+from autobones.landmarks.detect import symmetry_plane
+from autobones.expressions.model import ExpressionModel
+from autobones.rig_transfer.correspondence import dense_correspondence
+from autobones.geometry.rotations import axis_turn
 from autobones.orient import reflect
-from autobones.transfer import load_generic
+from autobones.rig_transfer.pipeline import load_generic
 
 from shared_data import ROOT, data
 

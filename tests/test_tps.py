@@ -6,7 +6,7 @@ import pytest
 
 from autobones.errors import AutobonesError
 from autobones.io.mesh import load_mesh
-from autobones.tps import ThinPlateSpline, landmark_arrays
+from autobones.geometry.tps import ThinPlateSpline, landmark_arrays
 
 from shared_data import data
 
@@ -59,7 +59,7 @@ def test_regularisation_trades_exactness_for_smoothness():
 
 
 def test_transform_is_chunked_and_matches_direct_sum():
-    import autobones.tps as tps_mod
+    import autobones.geometry.tps as tps_mod
 
     P, Q = _random_landmarks(15, seed=2)
     tps = ThinPlateSpline().fit(P, Q)

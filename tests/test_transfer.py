@@ -84,7 +84,7 @@ def test_ict_eyeballs_follow_the_eye_bones(transferred):
         # the eye bone turns the eyeball about its own centre (the warped pivot was 6-8% of
         # ex-ex off it): the bound vertices keep their distance to the pivot within the cornea
         # bulge, and the pivot is the sphere's centre to 1% of ex-ex
-        from autobones.transfer import fit_sphere
+        from autobones.rig_transfer.pipeline import fit_sphere
 
         P = rig.vertices[bound]
         centre, radius = fit_sphere(P)
@@ -96,7 +96,7 @@ def test_generic_landmarks_land_on_the_heads_landmarks():
     """The generic rig's own landmarks, carried by the correspondence, land on ICT identity002's
     published ones: within 3% mean / 6% max of the eye-corner distance (ex-ex). With the
     landmark term at weight 1 (the old default) they were 7.0% / 14% off; at 30, 1.75% / 4.2%."""
-    from autobones.transfer import load_generic, ride
+    from autobones.rig_transfer.pipeline import load_generic, ride
 
     mesh, marks = HEADS["ict"]
     details = {}
@@ -113,7 +113,7 @@ def test_generic_landmarks_land_on_the_heads_landmarks():
 
 
 def test_fit_sphere_recovers_a_sphere_and_ignores_its_frame():
-    from autobones.transfer import fit_sphere
+    from autobones.rig_transfer.pipeline import fit_sphere
 
     rng = np.random.default_rng(0)
     d = rng.normal(size=(400, 3))

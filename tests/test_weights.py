@@ -3,7 +3,8 @@ import numpy as np
 import trimesh
 
 from autobones.io.mesh import load_mesh
-from autobones.weights import bone_heat_weights, segment_distances, weld
+from autobones.placement.skin_weights import bone_heat_weights, segment_distances
+from autobones.geometry.topology import weld
 
 from shared_data import data, icosphere
 

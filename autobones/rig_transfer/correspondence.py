@@ -83,56 +83,20 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import linear_sum_assignment
-from scipy.sparse.csgraph import connected_components
-from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
 
-from .errors import AutobonesError
-from .stick import _check, closest_points, stick
-from .tps import ThinPlateSpline, _as_points, landmark_arrays
+from ..errors import AutobonesError
+from ..geometry.areas import vertex_areas
+from ..geometry.closest import closest_points
+from ..geometry.laplacian import factor_spd
+from ..geometry.normals import vertex_normals
+from ..geometry.rotations import axis_turn, rotate_between
+from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
+from ..geometry.validate import mesh_arrays
+from ..geometry.tps import ThinPlateSpline, as_points, landmark_arrays
+from .stick import stick
 
 log = logging.getLogger(__name__)
-
-
-def mesh_edges(F):
-    """Unique undirected edges ``(e, 2)`` int64 of triangles ``F``, ``i < j``."""
-    F = np.asarray(F, dtype=np.int64)
-    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    n = int(hi.max()) + 1 if len(hi) else 1
-    key = np.unique(lo * n + hi)
-    return np.stack([key // n, key % n], axis=1)
-
-
-def mesh_parts(n, F):
-    """Connected component label ``(n,)`` of each vertex (vertices in no face get their own)."""
-    E = mesh_edges(F)
-    A = sp.csr_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
-    return connected_components(A, directed=False)[1]
-
-
-def boundary_vertices(n, F):
-    """Boolean ``(n,)``: vertex lies on an edge used by exactly one triangle."""
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    E.sort(axis=1)
-    key = E[:, 0] * n + E[:, 1]
-    u, count = np.unique(key, return_counts=True)
-    b = u[count == 1]
-    out = np.zeros(n, dtype=bool)
-    out[b // n] = True
-    out[b % n] = True
-    return out
-
-
-def _rotate(a, b, v):
-    """Rotate rows of ``v`` by the smallest rotation taking unit ``a`` to unit ``b``."""
-    k = np.cross(a, b)
-    s = np.linalg.norm(k, axis=1, keepdims=True)
-    c = np.einsum("ij,ij->i", a, b)[:, None]
-    k = k / np.maximum(s, 1e-12)
-    return v * c + np.cross(k, v) * s + k * np.einsum("ij,ij->i", k, v)[:, None] * (1.0 - c)
 
 
 class _PartTrees:
@@ -162,21 +126,6 @@ class _PartTrees:
         return out
 
 
-def _vertex_normals(V, F):
-    """Area-weighted unit vertex normals (as :func:`autobones.stick.vertex_normals`, via bincount)."""
-    FN = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    idx = F.ravel()
-    N = np.stack([np.bincount(idx, np.repeat(FN[:, k], 3), minlength=len(V)) for k in range(3)], axis=1)
-    length = np.linalg.norm(N, axis=1, keepdims=True)
-    return N / np.where(length > 0, length, 1.0)
-
-
-def _vertex_areas(V, F):
-    """A third of the area of the triangles around each vertex, ``(n,)``."""
-    A = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-    return np.bincount(F.ravel(), np.repeat(A / 3.0, 3), minlength=len(V))
-
-
 def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big, cos_max):
     """Target -> source matches: every target vertex ``tq`` goes to its nearest source vertex ``sidx``.
 
@@ -196,28 +145,6 @@ def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big
     M = np.stack([np.bincount(i, area_t[k] * V_tgt[k, c], minlength=len(X)) for c in range(3)], axis=1)
     M[has] /= a[has, None]
     return has, M, a
-
-
-def axis_turn(A):
-    """The axis-aligned rotation nearest the linear part ``A`` (3, 3) of a row-vector map
-    ``x -> x @ A + t``: (3, 3), a signed permutation with det +1, applied as ``x @ R``.
-
-    Each source axis goes to the target axis it is most aligned with after the polar
-    rotation of ``A``: the 24 axis turns are the ways a mesh file can choose its up and
-    front. The identity for a head modelled facing the generic's way (tilted by less than
-    about 45 degrees: such heads fit exactly as before); never farther from the polar
-    rotation than the identity is.
-    """
-    U, _, Vt = np.linalg.svd(np.asarray(A, dtype=np.float64))
-    R = U @ Vt
-    R = R * np.where(np.linalg.det(R) < 0, -1.0, 1.0)   # mirrored landmarks: the nearest rotation
-    T = np.zeros((3, 3))
-    rows, cols = linear_sum_assignment(-np.abs(R))
-    T[rows, cols] = np.sign(R[rows, cols])
-    if np.linalg.det(T) < 0:   # keep it a rotation: flip the least certain axis
-        k = int(np.argmin(np.abs(R[rows, cols])))
-        T[rows[k], cols[k]] *= -1.0
-    return T
 
 
 def _decimate(V, F, count):
@@ -275,12 +202,12 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
                       shape=(m, n))
     DtD = (D.T @ D).tocsc()
     if edge_reference == "tps":
-        N_src = _vertex_normals(X, F_src)
+        N_src = vertex_normals(X, F_src)
         edge_src = X[E[:, 0]] - X[E[:, 1]]
     else:
         # in the target file's axes: R_ij below only tilts the normal and cannot turn edges about it
         turn = axis_turn(tps.affine_[1:])
-        N_src = _vertex_normals(V_src, F_src) @ turn
+        N_src = vertex_normals(V_src, F_src) @ turn
         edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]]) @ turn
     n_edge_src = N_src[E[:, 0]] + N_src[E[:, 1]]
     n_edge_src /= np.maximum(np.linalg.norm(n_edge_src, axis=1, keepdims=True), 1e-12)
@@ -292,14 +219,14 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
 
     nt = len(V_tgt)
     if not tgt:  # target-side setup, shared by the coarse and the fine solve
-        tgt["N"] = _vertex_normals(V_tgt, F_tgt)
+        tgt["N"] = vertex_normals(V_tgt, F_tgt)
         tgt["in_face"] = np.zeros(nt, dtype=bool)
         tgt["in_face"][F_tgt.ravel()] = True
         tgt["part"] = mesh_parts(nt, F_tgt)
         tgt["trees"] = _PartTrees(V_tgt, tgt["in_face"], tgt["part"])
         tgt["bnd"] = boundary_vertices(nt, F_tgt)
         tgt["btrees"] = _PartTrees(V_tgt, tgt["bnd"], tgt["part"]) if tgt["bnd"].any() else None
-        tgt["area"] = _vertex_areas(V_tgt, F_tgt)
+        tgt["area"] = vertex_areas(V_tgt, F_tgt)
     N_tgt, tgt_in_face, tgt_part, trees = tgt["N"], tgt["in_face"], tgt["part"], tgt["trees"]
     cos_max = np.cos(np.radians(max_angle))
     face_labels = tgt_part[F_tgt[:, 0]]
@@ -308,7 +235,7 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
 
     if restrict_parts:
         src_part = mesh_parts(n, F_src)
-        N = _vertex_normals(X, F_src)
+        N = vertex_normals(X, F_src)
         near = trees.query(X, np.full(n, -1))
         agree = (np.einsum("ij,ij->i", N, N_tgt[near]) >= cos_max) & in_face
         labels = _part_map(src_part, tgt_part, near, agree)[src_part]
@@ -329,7 +256,7 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
 
     if symmetric_weight > 0:
         area_t = tgt["area"]
-        area_s = np.maximum(_vertex_areas(X, F_src), 1e-300)
+        area_s = np.maximum(vertex_areas(X, F_src), 1e-300)
         tlab = tgt_part if restrict_parts else np.full(nt, -1, dtype=np.int64)
         sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
         tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
@@ -337,9 +264,9 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         X = X0.copy()
     # --- staged least squares
     for lam in stages:
-        lu = splu((W + lam * DtD + BtB).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+        solve = factor_spd(W + lam * DtD + BtB)
         for _ in range(iterations):
-            N = _vertex_normals(X, F_src)
+            N = vertex_normals(X, F_src)
             if exact:
                 C, fc, _, _ = closest_points(X, V_tgt, F_tgt, labels, face_labels)
                 nj = FN_tgt[fc]
@@ -360,8 +287,8 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
                 C[has] = (C[has] + r * M[has]) / (1.0 + r)
             n_edge = N[E[:, 0]] + N[E[:, 1]]
             n_edge /= np.maximum(np.linalg.norm(n_edge, axis=1, keepdims=True), 1e-12)
-            rhs = w[:, None] * C + lam * (D.T @ _rotate(n_edge_src, n_edge, edge_src)) + BtQ
-            X = lu.solve(rhs)
+            rhs = w[:, None] * C + lam * (D.T @ rotate_between(n_edge_src, n_edge, edge_src)) + BtQ
+            X = solve(rhs)
     t3 = time.perf_counter()
     return X, labels, (t2 - t1, t3 - t2)
 
@@ -439,14 +366,14 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         Bad meshes or landmarks (see :class:`autobones.tps.ThinPlateSpline`).
     """
     t0 = time.perf_counter()
-    V_src, F_src = _check(V_src, F_src, "source mesh")
-    V_tgt, F_tgt = _check(V_tgt, F_tgt, "target mesh")
+    V_src, F_src = mesh_arrays(V_src, F_src, "source mesh")
+    V_tgt, F_tgt = mesh_arrays(V_tgt, F_tgt, "target mesh")
     if isinstance(lm_src, dict) or isinstance(lm_tgt, dict):
         if not (isinstance(lm_src, dict) and isinstance(lm_tgt, dict)):
             raise AutobonesError("give both landmark sets as dicts {name: [x, y, z]} or both as (k, 3) arrays")
         _, P, Q = landmark_arrays(lm_src, lm_tgt)
     else:
-        P, Q = _as_points(lm_src, "source landmarks"), _as_points(lm_tgt, "target landmarks")
+        P, Q = as_points(lm_src, "source landmarks"), as_points(lm_tgt, "target landmarks")
     if not len(stages) or min(stages) <= 0 or iterations < 1 or not len(fine_stages) or min(fine_stages) <= 0 \
             or fine_iterations < 1:
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")

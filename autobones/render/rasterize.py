@@ -38,7 +38,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import AutobonesError
+from ..errors import AutobonesError
+from ..geometry.normals import vertex_normals
+from ..geometry.validate import mesh_arrays
 
 # At most this many candidate pixels (triangle bounding-box pixels) per batch.
 _BATCH = 1 << 21
@@ -284,25 +286,6 @@ class RenderBuffers:
         return self.face_id >= 0
 
 
-def _check_mesh(V, F):
-    V = np.asarray(V, dtype=np.float64)
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise AutobonesError(f"vertices must be an (n, 3) array, got shape {V.shape}")
-    F = np.asarray(F)
-    if F.size == 0:
-        F = F.reshape(0, 3)
-    if F.ndim != 2 or F.shape[1] != 3:
-        raise AutobonesError(f"faces must be an (m, 3) array of triangles, got shape {F.shape}")
-    if not np.issubdtype(F.dtype, np.integer):
-        if not np.all(np.mod(F, 1) == 0):
-            raise AutobonesError("faces must hold integer vertex indices")
-    F = F.astype(np.int64)
-    if len(F) and (F.min() < 0 or F.max() >= len(V)):
-        raise AutobonesError(
-            f"faces index vertices 0..{F.max()} but there are only {len(V)} vertices")
-    return V, F
-
-
 def rasterize(V, F, camera):
     """Depth-buffered rasterisation: which triangle, where, under each pixel.
 
@@ -332,7 +315,7 @@ def rasterize(V, F, camera):
     >>> buf.face_id.shape, bool(buf.mask[32, 32])
     ((64, 64), True)
     """
-    V, F = _check_mesh(V, F)
+    V, F = mesh_arrays(V, F, "mesh", allow_no_faces=True, finite=False)
     W, H = int(camera.width), int(camera.height)
     npix = W * H
     zbuf = np.full(npix, np.inf)
@@ -432,7 +415,7 @@ def surface_points(V, F, buffers):
         World point under each pixel (on triangle ``face_id`` at ``bary``);
         NaN where empty.
     """
-    V, F = _check_mesh(V, F)
+    V, F = mesh_arrays(V, F, "mesh", allow_no_faces=True, finite=False)
     H, W = buffers.face_id.shape
     P = np.full((H, W, 3), np.nan)
     m = buffers.mask
@@ -441,32 +424,6 @@ def surface_points(V, F, buffers):
         b = buffers.bary[m]                               # (k, 3)
         P[m] = np.einsum("kj,kjd->kd", b, V[tri])
     return P
-
-
-def vertex_normals(V, F):
-    """Area-weighted unit vertex normals.
-
-    Parameters
-    ----------
-    V : (n, 3) float
-    F : (m, 3) int
-
-    Returns
-    -------
-    (n, 3) float64
-        Sum of the adjacent triangles' normals weighted by area, normalised;
-        zero rows for vertices on no (non-degenerate) triangle.
-    """
-    V, F = _check_mesh(V, F)
-    N = np.zeros_like(V)
-    if len(F):
-        fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])  # 2 * area * n
-        fn[~np.all(np.isfinite(fn), axis=1)] = 0.0
-        idx = F.reshape(-1)
-        for d in range(3):
-            N[:, d] = np.bincount(idx, weights=np.repeat(fn[:, d], 3), minlength=len(V))
-    n = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, n, out=np.zeros_like(N), where=n > 0)
 
 
 def shade(V, F, buffers, vertex_colors=None, light_dir=None, ambient=0.25):
@@ -495,7 +452,7 @@ def shade(V, F, buffers, vertex_colors=None, light_dir=None, ambient=0.25):
         interpolated area-weighted vertex normal (the triangle's own normal
         where the vertex normals cancel); two-sided, white background.
     """
-    V, F = _check_mesh(V, F)
+    V, F = mesh_arrays(V, F, "mesh", allow_no_faces=True, finite=False)
     H, W = buffers.face_id.shape
     img = np.full((H, W, 3), 255, dtype=np.uint8)
     m = buffers.mask
@@ -664,7 +621,7 @@ def encode_png(image):
 
 def save_png(path, image):
     """Write :func:`encode_png` of ``image`` to ``path``, atomically."""
-    from .io.atomic import write_bytes_atomic
+    from ..io.atomic import write_bytes_atomic
 
     return write_bytes_atomic(path, encode_png(image), "the picture")
 
@@ -716,7 +673,7 @@ def render_views(V, F, vertex_colors=None, views=("front", "side"), size=(512, 5
     (H, W * len(views), 3) uint8
         The panels left to right; all at the same scale (pixels per unit).
     """
-    V, F = _check_mesh(V, F)
+    V, F = mesh_arrays(V, F, "mesh", allow_no_faces=True, finite=False)
     W, H = _size(size)
     if isinstance(views, str):
         views = (views,)

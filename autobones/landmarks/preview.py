@@ -9,11 +9,11 @@ import os
 
 import numpy as np
 
-from .errors import AutobonesError
-from .io.atomic import output_folder
-from .orient import detect_frame, frame_from_landmarks
+from ..errors import AutobonesError
+from ..io.atomic import output_folder
+from ..orient import detect_frame, frame_from_landmarks
 from .detect import face_camera
-from .render import draw_points, rasterize, save_png, shade
+from ..render.rasterize import draw_points, rasterize, save_png, shade
 
 #: Marker colours: midline names, subject's left, subject's right (RGB).
 COLORS = {"mid": (220, 30, 30), "l": (20, 120, 230), "r": (20, 160, 60)}

@@ -27,7 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
+
+from ..geometry.laplacian import factor_spd, laplacian
+from ..geometry.topology import weld
 
 CHUNK = 65536
 
@@ -73,27 +75,6 @@ def prune_weights(W, fraction=0.01):
     return W / W.sum(axis=1, keepdims=True)
 
 
-def weld(V, F, tol):
-    """Merge vertices closer than ``tol`` (by rounding to a grid of that size).
-
-    Returns
-    -------
-    Vw : (k, 3) float
-        Welded vertices.
-    Fw : (m', 3) int
-        Faces on ``Vw``, faces that collapsed removed.
-    index : (n,) int
-        Welded vertex of each input vertex.
-    """
-    key = np.round(V / tol).astype(np.int64)
-    _, first, index = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    index = index.reshape(-1)
-    Vw = V[first]
-    Fw = index[F]
-    ok = (Fw[:, 0] != Fw[:, 1]) & (Fw[:, 1] != Fw[:, 2]) & (Fw[:, 0] != Fw[:, 2])
-    return Vw, Fw[ok], index
-
-
 def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     """Skin weights of every vertex for every bone.
 
@@ -117,8 +98,6 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
         Weights >= 0, each row summing to 1; unreferenced vertices copy the
         weights of the nearest referenced vertex.
     """
-    import robust_laplacian
-
     segments = np.asarray(segments, dtype=np.float64)
     Vw, Fw, index = weld(V, F, weld_tol)
     used = np.zeros(len(Vw), dtype=bool)
@@ -126,7 +105,7 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     remap = np.cumsum(used) - 1
     Vu, Fu = Vw[used], remap[Fw]
 
-    L, M = robust_laplacian.mesh_laplacian(Vu, Fu)
+    L, M = laplacian(Vu, Fu)
     D = segment_distances(Vu, segments)
     dmin = D.min(axis=1)
     scale = np.median(dmin[dmin > 0]) if (dmin > 0).any() else 1.0
@@ -139,7 +118,7 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     A = A + sp.diags(np.where(mh > 0, 0.0, 1.0))
     rhs = mh[:, None] * Pn
     rhs[mh <= 0] = Pn[mh <= 0]
-    Wu = splu(A, permc_spec="COLAMD").solve(rhs)  # MMD orderings cost minutes at 100k+ vertices
+    Wu = factor_spd(A)(rhs)
     Wu = np.clip(Wu, 0.0, None)
     Wu /= np.maximum(Wu.sum(axis=1, keepdims=True), 1e-300)
     if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp

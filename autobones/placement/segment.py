@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
 
-from .sample import sample_surface
+from ..geometry.sample import sample_surface
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")

@@ -73,15 +73,15 @@ import os
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
 
-from .build_rig import _diffuse, _laplacian
-from .errors import AutobonesError
-from .fit import mesh_parts
+from ..errors import AutobonesError
+from ..geometry.laplacian import diffuse, factor_spd, laplacian
+from ..geometry.normals import vertex_normals
+from ..geometry.smooth import ramp
+from ..geometry.topology import mesh_parts, weld
 from .muscles import muscles_from_rig
-from .weights import weld
-from .wire import wire_weights
+from .wires import wire_weights
 
 REGIONS_DEFAULT = ("scalp", "forehead", "brow", "eyelids", "nose", "cheeks", "lips", "chin", "jaw", "ears", "neck")
 LIDS = ("upper_l", "upper_r", "lower_l", "lower_r")
@@ -90,7 +90,7 @@ LIDS = ("upper_l", "upper_r", "lower_l", "lower_r")
 def load_expressions(path=None):
     """The expression definitions (default ``generic_rig/expressions.json``) as a dict."""
     if path is None:
-        from generic_rig import expressions_path
+        from ..generic_rig import expressions_path
 
         path = expressions_path()
     if isinstance(path, dict):
@@ -104,12 +104,6 @@ def load_expressions(path=None):
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise AutobonesError(f"{path}: cannot read the expression definitions ({exc})") from None
     return doc
-
-
-def _ramp(v, a, b):
-    """Smooth step: 0 at ``a``, 1 at ``b`` (either order), C1 in between."""
-    t = np.clip((np.asarray(v, dtype=np.float64) - a) / (b - a), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
 
 
 def _rot(axis, deg):
@@ -142,15 +136,6 @@ def x_turn(P, angle):
     (radians, scalar or (m,)) about the canonical +X axis (the lid and jaw joints' axis)."""
     ca, sa = np.cos(angle), np.sin(angle)
     return np.c_[np.zeros(len(P)), (ca - 1.0) * P[:, 1] - sa * P[:, 2], sa * P[:, 1] + (ca - 1.0) * P[:, 2]]
-
-
-def vertex_normals(V, F):
-    """(n, 3) area-weighted unit vertex normals (zero for vertices in no face)."""
-    FN = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    N = np.zeros_like(V)
-    for k in range(3):
-        N += np.stack([np.bincount(F[:, k], weights=FN[:, j], minlength=len(V)) for j in range(3)], axis=1)
-    return N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
 
 
 class ExpressionModel:
@@ -296,19 +281,19 @@ class ExpressionModel:
         dx = np.abs(Vc[:, 0] - st[0])
         z_ch = 0.5 * (ch_l[2] + ch_r[2])
         zh = float(lips["zone_height"]) * fu
-        zone = (_ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * _ramp(np.abs(s_mouth), zh, 0.6 * zh)
-                * _ramp(Vc[:, 2], z_ch - 0.4 * fu, z_ch - 0.3 * fu) * skin)
+        zone = (ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * ramp(np.abs(s_mouth), zh, 0.6 * zh)
+                * ramp(Vc[:, 2], z_ch - 0.4 * fu, z_ch - 0.3 * fu) * skin)
         # the mouth's lining (skin behind the lips facing into the head, e.g. ICT's mouth sock)
         # splits by the same line, over its whole depth and height
         centre = self.pivots_[names.index("head")] if "head" in names else Vc.mean(axis=0)
         inward = (N * (Vc - centre)).sum(axis=1) < 0
         lining = inward & skin
-        lining_zone = (_ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * _ramp(np.abs(s_mouth), 4.0 * zh, 3.0 * zh)
-                       * _ramp(Vc[:, 2], z_ch - 1.2 * fu, z_ch - 0.8 * fu))
+        lining_zone = (ramp(dx, float(lips["zone_half_width"]) * hw, 0.75 * hw) * ramp(np.abs(s_mouth), 4.0 * zh, 3.0 * zh)
+                       * ramp(Vc[:, 2], z_ch - 1.2 * fu, z_ch - 0.8 * fu))
         zone = np.where(lining, np.maximum(zone, lining_zone), zone)
         cut = float(lips["cut_width"]) * fu
         cut = cut * (1.0 + 4.0 * np.clip(dx / hw, 0.0, 1.2) ** 4)   # softer toward the corners
-        upper = _ramp(s_mouth, -0.5 * cut, 0.5 * cut)
+        upper = ramp(s_mouth, -0.5 * cut, 0.5 * cut)
         self.mouth_ = {"zone": zone, "upper": upper, "signed": s_mouth, "stomion": st}
 
         # --- wires, locators, point constraints ---------------------------------------------
@@ -370,7 +355,7 @@ class ExpressionModel:
         # smooth the muscle fields by heat diffusion over ~1 mm of skin (implicit step with the
         # intrinsic Laplacian, edges across the mouth line removed): a wire's dropoff varies faster
         # than the tiny triangles of mouth and eye corners can follow without folding
-        Lp, M = _laplacian(Vw, Fw)
+        Lp, M = laplacian(Vw, Fw)
         self._laplacian = (Lp, M)
         # unfolding averages over the intrinsic (Delaunay) Laplacian's non-negative weights: a
         # plain neighbour mean drags the tiny triangles of mouth corners along with big ones
@@ -395,9 +380,9 @@ class ExpressionModel:
             for sel, lap_ in ((~both, Lc), (both, Lp)):
                 if not sel.any():
                     continue
-                lu = splu((M + t_s * lap_).tocsc())
+                solve = factor_spd(M + t_s * lap_)
                 flat = G[sel][:, first].transpose(1, 0, 2).reshape(nw, -1)
-                flat = lu.solve(np.asarray(M @ flat))[index]
+                flat = solve(np.asarray(M @ flat))[index]
                 G[sel] = flat.reshape(n, int(sel.sum()), 3).transpose(1, 0, 2)
         if bool(model.get("normalise_overlaps", False)):
             G *= (1.0 / np.maximum(total, 1.0))[None, :, None]
@@ -415,14 +400,14 @@ class ExpressionModel:
                 if r_name in skull:
                     thick[region == r_i] = float(skull[r_name]) * fu
         # the offset skull is smooth: region thicknesses blend over ~1 cm of skin
-        self.thickness_ = _diffuse(thick[first], Lp, M, t=(float(skull.get("blend", 0.1)) * fu) ** 2)[index]
+        self.thickness_ = diffuse(thick[first], Lp, M, t=(float(skull.get("blend", 0.1)) * fu) ** 2)[index]
         # the offset skull lies under outward-facing skin only: not under the lips (the inner lip
         # surfaces face each other) nor under skin whose normal points into the head
         self.clamp_ = (zone < 0.05) & ~inward
         # muscles over bone (type option "slide"): where the skull lies close under outward skin
         # (soft tissue at most ``slide_thickness`` fu) the skin slides over it, so the part of
         # the field along the skull normal (toward a deep origin) is dropped
-        over_bone = self.clamp_ * _ramp(self.thickness_, 1.5 * float(model.get("slide_thickness", 0.04)) * fu,
+        over_bone = self.clamp_ * ramp(self.thickness_, 1.5 * float(model.get("slide_thickness", 0.04)) * fu,
                                         float(model.get("slide_thickness", 0.04)) * fu)
         Ns_ = self.skull_normals_
         for i, ty in enumerate(mj.types):
@@ -482,14 +467,14 @@ class ExpressionModel:
             a = float(lid["width_margin"]) * 0.5 * abs(ex[0] - en[0])
             cx = 0.5 * (ex[0] + en[0])
             depth = float(lid.get("depth", 0.02)) * fu
-            front = _ramp(Vc[:, 2], c[2] - depth, c[2] + 0.04 * fu)
+            front = ramp(Vc[:, 2], c[2] - depth, c[2] + 0.04 * fu)
             ru = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["upper_height"]) * fu)) ** 2)
             rl = np.sqrt(((Vc[:, 0] - cx) / a) ** 2 + (s_f / (float(lid["lower_height"]) * fu)) ** 2)
             is_open = mid_gap[e] > 0.25 * gap
             if is_open:
-                up_step, low_step = _ramp(s_f, 0.0, 0.15 * gap), _ramp(-s_f, 0.0, 0.15 * gap)
+                up_step, low_step = ramp(s_f, 0.0, 0.15 * gap), ramp(-s_f, 0.0, 0.15 * gap)
             else:  # closed lids (one surface across the fissure): spread so nothing folds over
-                up_step, low_step = _ramp(s_f, -0.5 * gap, 1.5 * gap), _ramp(-s_f, -0.5 * gap, 1.5 * gap)
+                up_step, low_step = ramp(s_f, -0.5 * gap, 1.5 * gap), ramp(-s_f, -0.5 * gap, 1.5 * gap)
             # the fissure opens as 1 - u^2 between the corners, so the lid joints turn less there
             u = (Vc[:, 0] - cx) / (0.5 * abs(ex[0] - en[0]))
             # the medial canthus is tied to bone, the lateral one is looser: toward (and past) the
@@ -499,9 +484,9 @@ class ExpressionModel:
             # above the margin the upper lid turns as one sheet: the corners hold the margin only,
             # so their hold fades over ``corner_release`` fissure heights up the lid
             rel = float(lid.get("corner_release", 0.0))
-            h_up = 1.0 - (1.0 - h) * (1.0 - _ramp(s_f, 0.0, rel * gap)) if rel > 0 else h
-            self.lid_weights_[e] = _ramp(ru, 1.0, 0.55) * up_step * front * skin * h_up
-            self.lid_weights_[2 + e] = _ramp(rl, 1.0, 0.55) * low_step * front * skin * h
+            h_up = 1.0 - (1.0 - h) * (1.0 - ramp(s_f, 0.0, rel * gap)) if rel > 0 else h
+            self.lid_weights_[e] = ramp(ru, 1.0, 0.55) * up_step * front * skin * h_up
+            self.lid_weights_[2 + e] = ramp(rl, 1.0, 0.55) * low_step * front * skin * h
             phi = lambda p: np.arctan2(p[1] - c[1], p[2] - c[2])  # noqa: E731
             self.lid_close_deg_[e] = np.degrees(phi(ps) - phi(pi))
             self.lid_pivots_[e] = c
@@ -510,7 +495,7 @@ class ExpressionModel:
         # angle, so a weight that changes within a few of the eye corners' tiny triangles folds them
         t_l = (float(lid.get("smoothing", model.get("smoothing", 0.012))) * fu) ** 2
         if t_l > 0:
-            lw = _diffuse(self.lid_weights_[:, first].T, Lp, M, t=t_l)[index].T
+            lw = diffuse(self.lid_weights_[:, first].T, Lp, M, t=t_l)[index].T
             # diffusion reaches the whole skin with vanishing weights: the lids keep their own area
             self.lid_weights_ = np.where(lw > 1e-3, np.clip(lw, 0.0, 1.0), 0.0) * skin
         # the lid margins ride the eyeball: the muscles around (frontalis, zygomatics) stretch the
@@ -562,30 +547,30 @@ class ExpressionModel:
             # under the chin the jaw swings toward the neck: spread its weight there so the skin
             # stretches instead of folding (heat diffusion, as build_rig smooths it)
             spread = float(model.get("jaw_spread", 0.15)) * fu
-            jaw_s = (np.clip(_diffuse(W[first, j], *self._laplacian, t=spread ** 2), 0.0, 1.0)[index]
+            jaw_s = (np.clip(diffuse(W[first, j], *self._laplacian, t=spread ** 2), 0.0, 1.0)[index]
                      if spread > 0 else W[:, j])
-            below = _ramp(s_mouth, 0.0, -0.1 * fu) * skin
+            below = ramp(s_mouth, 0.0, -0.1 * fu) * skin
             jaw_b = (1.0 - below) * W[:, j] + below * jaw_s
             # beside the mouth the cheek is one sheet from the cheekbone to the mandible: lateral of
             # the mouth corners it stretches as the jaw opens, the jaw weight diffusing up into it
             cheek = float(model.get("cheek_spread", 0.0)) * fu
             if cheek > 0:
-                jaw_c = np.clip(_diffuse(W[first, j], *self._laplacian, t=cheek ** 2), 0.0, 1.0)[index]
-                lateral = _ramp(dx, 0.8 * hw, 1.1 * hw) * skin * (1.0 - below)
+                jaw_c = np.clip(diffuse(W[first, j], *self._laplacian, t=cheek ** 2), 0.0, 1.0)[index]
+                lateral = ramp(dx, 0.8 * hw, 1.1 * hw) * skin * (1.0 - below)
                 jaw_b = np.where(lateral > 0, np.maximum(jaw_b, lateral * jaw_c + (1.0 - lateral) * jaw_b), jaw_b)
             # under the chin the opening jaw swings back toward the neck: the skin there follows it
             # less and less from the menton back, so it stretches instead of folding into the neck
             men = L.get("menton")
             if men is not None:
-                under = _ramp(Vc[:, 1], men[1] + float(model.get("under_chin_height", 0.15)) * fu, men[1]) * skin
-                fade = _ramp(Vc[:, 2], men[2] - float(model.get("under_chin_depth", 0.6)) * fu, men[2])
+                under = ramp(Vc[:, 1], men[1] + float(model.get("under_chin_height", 0.15)) * fu, men[1]) * skin
+                fade = ramp(Vc[:, 2], men[2] - float(model.get("under_chin_depth", 0.6)) * fu, men[2])
                 jaw_b = jaw_b * (1.0 - under * (1.0 - fade))
             # the lips join at the corners, where tiny triangles bridge the upper lip (hanging over
             # the lower) and the lower lip: any step in the jaw weight there turns them over, so the
             # cut grows from nothing at the cheilions to full half the mouth's half-width in (full
             # only at the stomion pinned the corners, a V-shaped opening; nearer the corners the
             # mouth's lining folds at AU26 and the unfolding moves a wide patch of it)
-            zone_j = zone * _ramp(dx, hw, 0.5 * hw)
+            zone_j = zone * ramp(dx, hw, 0.5 * hw)
             jaw_new = (1.0 - zone_j) * jaw_b + zone_j * (1.0 - upper)
             others = np.delete(np.arange(W.shape[1]), j)
             rest = W[:, others].sum(axis=1)
@@ -621,10 +606,10 @@ class ExpressionModel:
             # the joint, free from twice that in front: a sharper step turns the tongue's triangles
             # over at the joint as the jaw opens)
             ph = float(mouth.get("pharynx", 0.1)) * fu
-            front = _ramp(Vc[:, 2] - self.pivots_[j][2], -ph, 2.0 * ph)
+            front = ramp(Vc[:, 2] - self.pivots_[j][2], -ph, 2.0 * ph)
             for rows, cen, sm in found:
                 y = np.full(len(rows), cen[1] - st[1]) if sm else Vc[rows, 1] - level
-                jw = _ramp(y, band, -band) * front[rows]
+                jw = ramp(y, band, -band) * front[rows]
                 Wj[rows] = 0.0
                 Wj[rows, j] = jw
                 if "head" in names:

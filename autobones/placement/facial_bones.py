@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import AutobonesError
-from .stick import vertex_normals
+from ..errors import AutobonesError
+from ..geometry.areas import vertex_areas
+from ..geometry.normals import vertex_normals
 
 DENSITIES = {"sparse": 8, "medium": 16, "dense": 32}
 MIRROR = np.array([-1.0, 1.0, 1.0])
@@ -166,12 +167,6 @@ def _nearest(X, C):
         x = X[s:s + 32768]
         out[s:s + 32768] = np.argmin(cc[None, :] - 2.0 * x @ C.T, axis=1)
     return out
-
-
-def vertex_areas(V, F):
-    """(n,) barycentric area per vertex (a third of each incident triangle's area)."""
-    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-    return np.bincount(F.ravel(), weights=np.repeat(area / 3.0, 3), minlength=len(V))
 
 
 def _under_skin(V, F, P, partner, max_depth):

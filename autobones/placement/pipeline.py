@@ -12,21 +12,21 @@ import time
 
 import numpy as np
 
-from .facial import bone_count, facial_bones
-from .io.mesh import check_mesh, load_mesh
-from .orient import detect_frame
-from .rig import Rig
-from .timing import Stopwatch
+from .facial_bones import bone_count, facial_bones
+from ..io.mesh import check_mesh, load_mesh
+from ..orient import detect_frame
+from ..rig import Rig
+from ..timing import Stopwatch
 from .segment import segment_head
-from .skeleton import Skeleton
-from .weights import bone_heat_weights
+from ..skeleton import Skeleton
+from .skin_weights import bone_heat_weights
 
 log = logging.getLogger("autobones")
 
 
 def default_head():
     """(V, F) of the built-in default head (metres, +Y up, +Z front)."""
-    from generic_rig import default_head_path
+    from ..generic_rig import default_head_path
 
     return load_mesh(default_head_path())
 
@@ -34,7 +34,7 @@ def default_head():
 def resolve_mesh(mesh):
     """A path, a ``(V, F)`` pair, or None (the default head) -> (V, F, source file name)."""
     if mesh is None:
-        from generic_rig import default_head_path
+        from ..generic_rig import default_head_path
 
         return (*default_head(), os.path.basename(default_head_path()))
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
@@ -105,7 +105,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
     """``place`` with landmarks: facial bones on top of the transferred neck, head, jaw and eyes."""
-    from .transfer import transfer
+    from ..rig_transfer.pipeline import transfer
 
     base = transfer(mesh, landmarks, rig=rig, up=up, front=front)
     t = time.perf_counter()

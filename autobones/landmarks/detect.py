@@ -38,10 +38,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import AutobonesError
-from .io.landmarks import NAMES, mirror_name
-from .orient import Frame, detect_frame, reflect
-from .render import Camera, look_at, orthographic_camera, rasterize, shade, surface_points, vertex_normals
+from ..errors import AutobonesError
+from ..io.landmarks import NAMES, mirror_name
+from ..orient import Frame, detect_frame, reflect
+from ..render.rasterize import Camera, look_at, orthographic_camera, rasterize, shade, surface_points
+from ..geometry.normals import vertex_normals
 
 #: MediaPipe Face Mesh point indices -> contract name (the mean of the listed points).
 #: Indices from MediaPipe's canonical face model (``mesh_map.jpg``); the subject's
@@ -302,8 +303,8 @@ def skin_faces(V, F):
 
     Scanned or modelled heads often carry eyeballs, eyelashes, teeth in separate parts; a
     landmark lifted from an oblique picture must land on the skin, not on an eyelash."""
-    from .fit import mesh_parts
-    from .weights import weld
+    from ..geometry.topology import mesh_parts
+    from ..geometry.topology import weld
 
     area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
     _, Fw, index = weld(V, F, 1e-9 * max(float(np.ptp(V, axis=0).max()), 1e-300))
@@ -580,7 +581,7 @@ class LandmarkDetector:
 
     def _finish(self, V, F, Vc, frame, names, comb, spread, unit_c, view_info):
         """Drop, refine and snap onto the triangles ``F`` (the skin)."""
-        from .stick import closest_points
+        from ..geometry.closest import closest_points
 
         points = {n: comb[i] for i, n in enumerate(names) if np.all(np.isfinite(comb[i]))}
         dropped, flagged, confidence = {}, {}, {}
@@ -733,7 +734,7 @@ def detect_landmarks(mesh, up=None, front=None, name=None, **options):
         No face in the pictures (animals, most cartoons, a back-of-head scan), or the
         optional detector is not installed.
     """
-    from .place import resolve_mesh
+    from ..placement.pipeline import resolve_mesh
 
     V, F, source = resolve_mesh(mesh)
     frame = detect_frame(V, F, up=up, front=front)

@@ -22,17 +22,17 @@ import os
 
 import numpy as np
 
-from .attributes import transfer_fields
-from .errors import AutobonesError
-from .fit import dense_correspondence
-from .io.landmarks import NAMES, resolve_landmarks, validate_landmarks
-from .orient import detect_frame, frame_from_landmarks
+from .fields import transfer_fields
+from ..errors import AutobonesError
+from .correspondence import dense_correspondence
+from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
+from ..orient import detect_frame, frame_from_landmarks
 from .labelled_rig import _jsonable
-from .place import resolve_mesh
-from .rig import Rig
-from .timing import Stopwatch
-from .tps import ThinPlateSpline
-from .weights import prune_weights
+from ..placement.pipeline import resolve_mesh
+from ..rig import Rig
+from ..timing import Stopwatch
+from ..geometry.tps import ThinPlateSpline
+from ..placement.skin_weights import prune_weights
 
 log = logging.getLogger("autobones")
 
@@ -41,7 +41,7 @@ MIN_LANDMARKS = 10
 
 def load_generic(rig=None):
     """A LabelledRig from a folder (None: the built-in generic rig) or as given."""
-    from generic_rig import default_rig_path
+    from ..generic_rig import default_rig_path
 
     from .labelled_rig import LabelledRig
 
@@ -70,7 +70,7 @@ def generic_detected_landmarks(generic, rig=None):
     """Automatic landmarks of the generic rig's own skin, or None when its skin shows no face
     the detector knows. Cached: per rig folder (and its mesh's time stamp) across calls, on
     the object itself for a LabelledRig given directly."""
-    from .detect import LandmarkDetector, NoFaceError
+    from ..landmarks.detect import LandmarkDetector, NoFaceError
 
     def detect():
         try:
@@ -79,7 +79,7 @@ def generic_detected_landmarks(generic, rig=None):
             return None
 
     if rig is None or isinstance(rig, (str, os.PathLike)):
-        from generic_rig import default_rig_path
+        from ..generic_rig import default_rig_path
 
         folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
         key = (folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
@@ -94,7 +94,7 @@ def generic_detected_landmarks(generic, rig=None):
 def ride(points, V_src, F_src, P):
     """Points on the source surface moved with the correspondence ``P`` (n_src, 3): each is
     expressed in barycentric coordinates of its closest source triangle."""
-    from .stick import closest_points
+    from ..geometry.closest import closest_points
 
     _, face, bary = closest_points(np.asarray(points, dtype=np.float64), V_src, F_src)[:3]
     return np.einsum("ki,kij->kj", bary, P[F_src[face]])
@@ -136,7 +136,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("load")
     detected = None
     if landmarks is None:
-        from .detect import LandmarkDetector
+        from ..landmarks.detect import LandmarkDetector
 
         frame = detect_frame(V, F, up=up, front=front)
         detected = LandmarkDetector().detect(V, F, frame=frame, what=source or "the head")
@@ -224,7 +224,7 @@ def bind_eyeballs(V, F, W, skeleton, generic, under):
     pivot and it is no wider than 1.5 fissures (eyelashes and lids sit farther out).
     Returns the weights and ``{eye bone name: (n,) bool}`` of the vertices bound.
     """
-    from .fit import mesh_parts
+    from ..geometry.topology import mesh_parts
 
     names = skeleton.names
     bound = {}
@@ -274,7 +274,7 @@ def centre_eye_bones(V, skeleton, eyeballs, max_residual=0.1):
     Skeleton
         A copy with each such eye bone (head and tail) translated to its sphere's centre.
     """
-    from .skeleton import Skeleton
+    from ..skeleton import Skeleton
 
     heads, tails = skeleton.heads.copy(), skeleton.tails.copy()
     for eye, members in eyeballs.items():

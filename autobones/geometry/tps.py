@@ -23,13 +23,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import AutobonesError
+from ..errors import AutobonesError
 
 # Rows of query points per chunk in ``transform``: chunk x k distances at a time.
 CHUNK = 8192
 
 
-def _as_points(X, name):
+def as_points(X, name):
     """Return ``X`` as a finite ``(k, 3)`` float64 array or raise AutobonesError."""
     if isinstance(X, dict):
         raise AutobonesError(f"{name}: pass an array; for landmark dicts use landmark_arrays(src, dst)")
@@ -88,7 +88,7 @@ def check_landmarks(P, name="landmarks"):
         Fewer than 4 points, two points at the same place, or all points on
         one plane or line (the affine part would be undetermined).
     """
-    P = _as_points(P, name)
+    P = as_points(P, name)
     k = len(P)
     if k < 4:
         raise AutobonesError(
@@ -170,7 +170,7 @@ class ThinPlateSpline:
             plane or line, or a negative regularization.
         """
         P = check_landmarks(src, "source landmarks")
-        Q = _as_points(dst, "target landmarks")
+        Q = as_points(dst, "target landmarks")
         if Q.shape != P.shape:
             raise AutobonesError(
                 f"source has {len(P)} landmarks but target has {len(Q)}; pass the same landmarks in the same order")
@@ -211,7 +211,7 @@ class ThinPlateSpline:
         """
         if not hasattr(self, "coef_"):
             raise AutobonesError("ThinPlateSpline.transform called before fit")
-        X = _as_points(X, "points to warp")
+        X = as_points(X, "points to warp")
         Y = self.affine_[0] + X @ self.affine_[1:]
         C = self.control_points_
         for s in range(0, len(X), CHUNK):

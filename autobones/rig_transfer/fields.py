@@ -16,10 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
-from .errors import AutobonesError
-from .weights import weld
+from ..errors import AutobonesError
+from ..geometry.closest import closest_points
+from ..geometry.laplacian import factor_spd, laplacian
+from ..geometry.topology import weld
 
 
 def sample_fields(V_src, F_src, P):
@@ -40,8 +41,6 @@ def sample_fields(V_src, F_src, P):
     bary : (k, 3) float
     distance : (k,) float
     """
-    from .stick import closest_points
-
     C, face, bary = closest_points(P, V_src, F_src)[:3]
     return face, bary, np.linalg.norm(C - P, axis=1)
 
@@ -68,8 +67,6 @@ def inpaint(V, F, values, known):
         with the known rows fixed. A part with no known vertex takes the value of
         the nearest known vertex.
     """
-    import robust_laplacian
-
     values = np.asarray(values, dtype=np.float64)
     flat = values.ndim == 1
     X = values[:, None] if flat else values.copy()
@@ -87,7 +84,7 @@ def inpaint(V, F, values, known):
     Xw[index[known]] = X[known]
     used = np.zeros(len(Vw), dtype=bool)
     used[Fw.ravel()] = True
-    L, _ = robust_laplacian.mesh_laplacian(Vw[used], np.cumsum(used)[Fw] - 1) if len(Fw) else (None, None)
+    L, _ = laplacian(Vw[used], np.cumsum(used)[Fw] - 1) if len(Fw) else (None, None)
     sub = np.flatnonzero(used)
     unknown = sub[~kw[sub]]
     if len(unknown) and L is not None:
@@ -102,7 +99,7 @@ def inpaint(V, F, values, known):
         Luu = (Luu + sp.diags(np.where(reach, 0.0, 1.0))).tocsc()
         rhs = -(Luk @ Xw[sub[kw[sub]]])
         rhs[~reach] = 0.0
-        Xw[unknown] = splu(Luu).solve(np.ascontiguousarray(rhs))
+        Xw[unknown] = factor_spd(Luu)(np.ascontiguousarray(rhs))
         kw[unknown[reach]] = True
     if not kw.all():
         from scipy.spatial import cKDTree
@@ -157,7 +154,7 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     reliable : (n_t,) bool
         Target vertices that copied their value (the rest were inpainted).
     """
-    from .stick import triangle_normals, vertex_normals
+    from ..geometry.normals import triangle_normals, vertex_normals
 
     size = np.ptp(V_tgt, axis=0).max()
     face, bary, dist = sample_fields(V_stuck, F_src, V_tgt)
@@ -211,9 +208,9 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     -------
     dict of str -> array, one row per target vertex.
     """
-    from .fit import dense_correspondence
-    from .io.landmarks import resolve_landmarks
-    from .place import resolve_mesh
+    from .correspondence import dense_correspondence
+    from ..io.landmarks import resolve_landmarks
+    from ..placement.pipeline import resolve_mesh
 
     Vs, Fs, _ = resolve_mesh(source_mesh)
     Vt, Ft, _ = resolve_mesh(target_mesh)

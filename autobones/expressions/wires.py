@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .errors import AutobonesError
+from ..errors import AutobonesError
 
 
 def dropoff(x):

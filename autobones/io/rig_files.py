@@ -15,11 +15,11 @@ import zipfile
 
 import numpy as np
 
-from .errors import AutobonesError
-from .io.gltf import read_accessor, read_glb
-from .orient import Frame
-from .rig import Rig, sidecar_paths
-from .skeleton import Skeleton
+from ..errors import AutobonesError
+from .gltf import read_accessor, read_glb
+from ..orient import Frame
+from ..rig import Rig, sidecar_paths
+from ..skeleton import Skeleton
 
 # sidecar keys the Rig rebuilds itself; every other key goes back into ``rig.extra``
 _OWN_KEYS = ("format", "autobones_version", "options", "frame", "vertex_count", "bones", "label_names", "labels",

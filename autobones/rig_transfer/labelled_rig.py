@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import AutobonesError
-from .skeleton import Skeleton
+from ..errors import AutobonesError
+from ..skeleton import Skeleton
 
 FORMAT = "autobones-labelled-rig/1"
 FILES = ("rig.json", "mesh.obj", "fields.npz")

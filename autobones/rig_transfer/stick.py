@@ -22,127 +22,11 @@ libigl's AABB tree; nothing is ``O(n^2)``.
 from __future__ import annotations
 
 import numpy as np
-import igl
 
-from .errors import AutobonesError
-
-
-def _check(V, F, name):
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    F = np.ascontiguousarray(F, dtype=np.int64)
-    if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
-        raise AutobonesError(f"{name}: vertices must have shape (n, 3), got {V.shape}")
-    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
-        raise AutobonesError(f"{name}: faces must have shape (m, 3), got {F.shape}")
-    if F.min() < 0 or F.max() >= len(V):
-        raise AutobonesError(f"{name}: face indices out of range 0..{len(V) - 1}")
-    if not np.isfinite(V).all():
-        raise AutobonesError(f"{name}: vertices contain NaN or infinite coordinates")
-    return V, F
-
-
-def barycentric(P, A, B, C):
-    """Barycentric coordinates of points in their triangles.
-
-    Parameters
-    ----------
-    P, A, B, C : (n, 3) float
-        Points and the corners of the triangle each lies on (or near).
-
-    Returns
-    -------
-    W : (n, 3) float64
-        Coordinates ``(wa, wb, wc)``, summing to one, of the projection of P
-        onto the triangle's plane; degenerate triangles give the nearest corner
-        weights ``(1, 0, 0)``.
-    """
-    v0, v1, v2 = B - A, C - A, P - A
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    den = d00 * d11 - d01 * d01
-    ok = den > 1e-300
-    den = np.where(ok, den, 1.0)
-    wb = np.where(ok, (d11 * d20 - d01 * d21) / den, 0.0)
-    wc = np.where(ok, (d00 * d21 - d01 * d20) / den, 0.0)
-    W = np.stack([1.0 - wb - wc, wb, wc], axis=1)
-    # closest points lie in their triangle: clean round-off outside [0, 1]
-    W = np.clip(W, 0.0, 1.0)
-    return W / W.sum(axis=1, keepdims=True)
-
-
-def closest_points(P, V, F, labels=None, face_labels=None):
-    """Closest point of a triangle mesh to each query point.
-
-    Parameters
-    ----------
-    P : (n, 3) float
-        Query points, in the mesh's frame and units.
-    V : (m_v, 3) float
-        Target vertices.
-    F : (m, 3) int
-        Target triangles.
-    labels : (n,) int, optional
-        Part of each query point; with ``face_labels``, a point with label
-        ``g >= 0`` only lands on faces labelled ``g`` (if there are any);
-        ``-1`` lands anywhere.
-    face_labels : (m,) int, optional
-        Part of each target face.
-
-    Returns
-    -------
-    C : (n, 3) float64
-        Closest points on the surface.
-    face : (n,) int64
-        Target face of each closest point.
-    bary : (n, 3) float64
-        Barycentric coordinates of ``C`` in ``V[F[face]]``.
-    sqrd : (n,) float64
-        Squared distances, in squared mesh units.
-    """
-    P = np.ascontiguousarray(P, dtype=np.float64)
-    n = len(P)
-    C = np.empty((n, 3))
-    face = np.empty(n, dtype=np.int64)
-    sqrd = np.empty(n)
-    if labels is None or face_labels is None:
-        groups = [(np.arange(n), np.arange(len(F)))]
-    else:
-        labels = np.asarray(labels)
-        face_labels = np.asarray(face_labels)
-        groups = []
-        anywhere = labels < 0
-        for g in np.unique(labels[labels >= 0]):
-            fi = np.flatnonzero(face_labels == g)
-            pi = np.flatnonzero(labels == g)
-            if len(fi) == 0:
-                anywhere[pi] = True
-            else:
-                groups.append((pi, fi))
-        if anywhere.any():
-            groups.append((np.flatnonzero(anywhere), np.arange(len(F))))
-    for pi, fi in groups:
-        d, i, c = igl.point_mesh_squared_distance(P[pi], V, np.ascontiguousarray(F[fi]))
-        C[pi], face[pi], sqrd[pi] = c, fi[i], d
-    T = V[F[face]]
-    return C, face, barycentric(C, T[:, 0], T[:, 1], T[:, 2]), sqrd
-
-
-def triangle_normals(V, F):
-    """Unnormalised face normals (twice the area vector), ``(m, 3)``."""
-    return np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-
-
-def vertex_normals(V, F):
-    """Area-weighted unit vertex normals ``(n, 3)``; zero for vertices in no face."""
-    N = np.zeros_like(V)
-    FN = triangle_normals(V, F)
-    for k in range(3):
-        np.add.at(N, F[:, k], FN)
-    length = np.linalg.norm(N, axis=1, keepdims=True)
-    return N / np.where(length > 0, length, 1.0)
+from ..errors import AutobonesError
+from ..geometry.closest import closest_points
+from ..geometry.normals import triangle_normals, vertex_normals
+from ..geometry.validate import mesh_arrays
 
 
 def stick(V_src, F_src, V_tgt, F_tgt, max_angle=60.0, min_area_ratio=0.01, labels=None, face_labels=None):
@@ -195,8 +79,8 @@ def stick(V_src, F_src, V_tgt, F_tgt, max_angle=60.0, min_area_ratio=0.01, label
     >>> bool(ok.all())
     True
     """
-    V_src, F_src = _check(V_src, F_src, "source mesh")
-    V_tgt, F_tgt = _check(V_tgt, F_tgt, "target mesh")
+    V_src, F_src = mesh_arrays(V_src, F_src, "source mesh")
+    V_tgt, F_tgt = mesh_arrays(V_tgt, F_tgt, "target mesh")
     if labels is not None and len(labels) != len(V_src):
         raise AutobonesError(f"labels: {len(labels)} values for {len(V_src)} source vertices")
     if face_labels is not None and len(face_labels) != len(F_tgt):

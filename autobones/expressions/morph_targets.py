@@ -15,7 +15,7 @@ import json
 
 import numpy as np
 
-from .errors import AutobonesError
+from ..errors import AutobonesError
 
 SIDES = ("L", "R")
 

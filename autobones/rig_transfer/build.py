@@ -73,9 +73,12 @@ import os
 
 import numpy as np
 
-from .errors import AutobonesError
+from ..errors import AutobonesError
+from ..geometry.laplacian import diffuse, laplacian
+from ..geometry.smooth import step
+from ..geometry.topology import mesh_parts
+from ..skeleton import Skeleton
 from .labelled_rig import LabelledRig
-from .skeleton import Skeleton
 
 log = logging.getLogger(__name__)
 
@@ -102,7 +105,7 @@ ADULT_EX_EX_CM = 9.3
 def load_muscle_definitions(path=None):
     """The muscle list of a muscles JSON file (default: ``generic_rig/muscles.json``)."""
     if path is None:
-        from generic_rig import muscles_path
+        from ..generic_rig import muscles_path
 
         path = muscles_path()
     path = os.fspath(path)
@@ -154,8 +157,8 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     """
     import igl
 
-    from .io.mesh import check_mesh
-    from .orient import detect_frame
+    from ..io.mesh import check_mesh
+    from ..orient import detect_frame
 
     V, F = check_mesh(np.asarray(V, dtype=np.float64), np.asarray(F), name="build_rig mesh")
     if muscles is None or isinstance(muscles, (str, os.PathLike)):
@@ -213,13 +216,13 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     below_mouth = (Vc - L["stomion"]) @ up_n
     above_jawline = (Vc - L["menton"]) @ low_n
     front_of_ramus = (Vc - jaw0) @ ramus_n
-    raw = (_step(below_mouth, 0.05 * cm, 0.8 * cm) * _step(above_jawline, -0.6 * cm, cm)
-           * _step(front_of_ramus, 0.0, cm))
-    lap = _laplacian(Vc, F)
-    jaw = np.clip(_diffuse(raw, *lap, t=(0.25 * cm) ** 2), 0.0, 1.0)
+    raw = (step(below_mouth, 0.05 * cm, 0.8 * cm) * step(above_jawline, -0.6 * cm, cm)
+           * step(front_of_ramus, 0.0, cm))
+    lap = laplacian(Vc, F)
+    jaw = np.clip(diffuse(raw, *lap, t=(0.25 * cm) ** 2), 0.0, 1.0)
 
     # --- eyes: separate eyeball components ---------------------------------------------------
-    comp = _components(len(Vc), F)
+    comp = mesh_parts(len(Vc), F)
     eye_w = {s: np.zeros(len(Vc)) for s in ("l", "r")}
     main = np.bincount(comp).argmax()
     for c in np.unique(comp):
@@ -236,14 +239,14 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
 
     # neck: the skin below the neck plane, fading over 3 cm across it (bone heat alone gave the
     # face to the neck bone, whose top sits nearer the lips than the head bone does)
-    neck_w = np.clip(_diffuse(_step(-_above_neck_plane(Vc, L, cm), 0.0, 3.0 * cm), *lap, t=(0.5 * cm) ** 2), 0.0, 1.0)
+    neck_w = np.clip(diffuse(step(-_above_neck_plane(Vc, L, cm), 0.0, 3.0 * cm), *lap, t=(0.5 * cm) ** 2), 0.0, 1.0)
     rest = 1.0 - jaw - eye_any
     W = np.column_stack([neck_w * rest, (1.0 - neck_w) * rest, jaw, eye_w["l"], eye_w["r"]])
     W = np.clip(W, 0.0, None)
     W /= W.sum(axis=1, keepdims=True)
 
     # --- regions -----------------------------------------------------------------------------
-    from .segment import segment_head
+    from ..placement.segment import segment_head
 
     region = _regions(Vc, L, cm, jaw, below_mouth, jaw0)
     seg = segment_head(Vc, F)
@@ -313,36 +316,6 @@ def _plane_normal(a, b, c, toward):
     n = np.cross(b - a, c - a)
     n /= np.linalg.norm(n)
     return n if n @ toward >= 0 else -n
-
-
-def _step(d, centre, width):
-    """0 below centre - width/2, 1 above centre + width/2, smooth (C1) between."""
-    t = np.clip((d - centre) / width + 0.5, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
-def _laplacian(V, F):
-    import robust_laplacian
-
-    Lp, M = robust_laplacian.mesh_laplacian(np.ascontiguousarray(V), np.ascontiguousarray(F))
-    return Lp, M
-
-
-def _diffuse(u, Lp, M, t):
-    """One implicit heat step (M + t L) u' = M u."""
-    from scipy.sparse.linalg import spsolve
-
-    A = (M + t * Lp).tocsc()
-    return spsolve(A, M @ u)
-
-
-def _components(n, F):
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    E = np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    A = sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
-    return connected_components(A, directed=False)[1]
 
 
 def _regions(Vc, L, cm, jaw, below_mouth, jaw0):

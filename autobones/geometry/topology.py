@@ -1,0 +1,56 @@
+"""Connectivity of triangle meshes: edges, boundary, connected parts, welding coincident vertices."""
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+
+def mesh_edges(F):
+    """Unique undirected edges ``(e, 2)`` int64 of triangles ``F`` ``(m, 3)``, with ``i < j``."""
+    F = np.asarray(F, dtype=np.int64)
+    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    n = int(hi.max()) + 1 if len(hi) else 1
+    key = np.unique(lo * n + hi)
+    return np.stack([key // n, key % n], axis=1)
+
+
+def mesh_parts(n, F):
+    """Connected component label ``(n,)`` of each of ``n`` vertices (vertices in no face get their own)."""
+    E = mesh_edges(F)
+    A = sp.csr_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
+    return connected_components(A, directed=False)[1]
+
+
+def boundary_vertices(n, F):
+    """Boolean ``(n,)``: the vertex lies on an edge used by exactly one triangle."""
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    E.sort(axis=1)
+    key = E[:, 0] * n + E[:, 1]
+    u, count = np.unique(key, return_counts=True)
+    b = u[count == 1]
+    out = np.zeros(n, dtype=bool)
+    out[b // n] = True
+    out[b % n] = True
+    return out
+
+
+def weld(V, F, tol):
+    """Merge vertices closer than ``tol`` (mesh units) by rounding to a grid of that size.
+
+    Returns
+    -------
+    Vw : (k, 3) float
+        Welded vertices (the first input vertex of each grid cell).
+    Fw : (m', 3) int
+        Faces on ``Vw``; faces that collapsed are removed.
+    index : (n,) int
+        Welded vertex of each input vertex.
+    """
+    key = np.round(V / tol).astype(np.int64)
+    _, first, index = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    index = index.reshape(-1)
+    Vw = V[first]
+    Fw = index[F]
+    ok = (Fw[:, 0] != Fw[:, 1]) & (Fw[:, 1] != Fw[:, 2]) & (Fw[:, 0] != Fw[:, 2])
+    return Vw, Fw[ok], index
