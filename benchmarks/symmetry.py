@@ -44,7 +44,7 @@ ROOT = HERE.parent
 DATA = ROOT.parent / "shared" / "data"
 sys.path.insert(0, str(ROOT))
 
-from autobones.landmarks.detect import symmetry_plane  # noqa: E402  (the landmarks' mirror plane)
+from autobones.landmarks.refine import symmetry_plane  # noqa: E402  (the landmarks' mirror plane)
 from autobones.orient import reflect  # noqa: E402
 
 HEADS = {  # name: (mesh or None for the default head, landmark file)

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-from autobones.render import rasterize as render
+from autobones import render
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parent.parent / "shared" / "data"

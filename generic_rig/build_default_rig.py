@@ -52,7 +52,7 @@ def jaw_colors(w):
 
 
 def render(rig, path):
-    from autobones.render.rasterize import render_views, save_png
+    from autobones.render import render_views, save_png
 
     V, F = rig.vertices, rig.faces
     segs = [rig.skeleton.segments]

@@ -52,7 +52,7 @@ if ROOT not in sys.path:
 
 from autobones.io.landmarks import NAMES, MIDLINE, validate_landmarks, write_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
-from generic_rig.build_default_head import ANATOMY  # noqa: E402
+from autobones.generic_rig.build_default_head import ANATOMY  # noqa: E402
 
 MESH = os.path.join(HERE, "default_head.obj")
 OUT = os.path.join(HERE, "default_head.landmarks.json")

@@ -1,7 +1,7 @@
 """A corpus of bad and hostile inputs, generated (never committed as binaries) for the batch tests.
 
 Every case is a small file (or a mesh plus a landmark file) built from the robot head of
-``../shared/data`` or from nothing, with what the batch must do with it:
+``tests/data`` or from nothing, with what the batch must do with it:
 
 - ``expect="failed"``: one clear message naming the file and containing ``needle``, no
   output file, the other files of the batch still finish;

@@ -1,17 +1,126 @@
-"""Paths to the third-party meshes in ../shared/data, and small synthetic meshes for tests."""
+"""Paths to the third-party test meshes carried in tests/data, and small synthetic meshes for tests.
+
+The meshes are stored compactly in ``tests/data/<family>/meshes.npz`` (one topology stored once per
+family, vertices float32 where that is bit-exact after writing; see ``tests/data/LICENSES.md``) and
+written out on first use as real files (``.obj`` / binary ``.ply``, same names as in the shared data
+set) into a per-user cache folder keyed by the content of the store. Loading a written file gives
+exactly the arrays of the original file: ``tests/data/make_test_data.py`` checks that when it builds
+the store. Landmark files (``*.landmarks.json``) are copied as they are, beside their meshes.
+"""
+import hashlib
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
+STORE = ROOT / "tests" / "data"
+
+
+def _cache_dir():
+    h = hashlib.sha256(Path(__file__).read_bytes())
+    for f in sorted(STORE.glob("*/*")):
+        if f.is_file():
+            h.update(f.relative_to(STORE).as_posix().encode() + b"\0" + f.read_bytes())
+    user = str(os.getuid()) if hasattr(os, "getuid") else "user"
+    return Path(tempfile.gettempdir()) / f"autobones-test-data-{user}-{h.hexdigest()[:16]}"
+
+
+# Materialised copies of tests/data: <DATA>/<family>/<file>, the layout of the shared data set.
+DATA = _cache_dir()
 
 
 def data(rel):
-    """Path of a shared mesh; fails (never skips) when the shared folder is missing."""
-    path = DATA / rel
-    assert path.is_file(), f"missing test mesh {path}: the shared data folder must sit beside the checkout"
+    """Path of a test mesh or landmark file (e.g. ``"ict/identity000.obj"``), written on first use.
+
+    Fails (never skips) when ``rel`` is not in tests/data.
+    """
+    family, name = rel.split("/")
+    path = DATA / family / name
+    if not path.is_file():
+        src = STORE / family / name
+        if name.endswith(".json"):
+            assert src.is_file(), f"missing test file {src}: add it with tests/data/make_test_data.py"
+            _atomic_write(path, src.read_bytes())
+        else:
+            store = STORE / family / "meshes.npz"
+            assert store.is_file(), f"missing test mesh store {store}: see tests/data/make_test_data.py"
+            with np.load(store) as z:
+                assert f"{name}/vertices" in z.files, \
+                    f"missing test mesh {rel} in {store}: add it with tests/data/make_test_data.py"
+                _atomic_write(path, mesh_bytes(z, name, f"{family}/{name}"))
+        # the landmark files of the family sit beside its meshes, as in the shared data set
+        for lm in (STORE / family).glob("*.landmarks.json"):
+            if not (DATA / family / lm.name).is_file():
+                _atomic_write(DATA / family / lm.name, lm.read_bytes())
     return path
+
+
+def landmark_files():
+    """Every ``<family>/*.landmarks.json`` of tests/data, written out beside its mesh; sorted paths."""
+    out = []
+    for lm in sorted(STORE.glob("*/*.landmarks.json")):
+        stem = lm.name[: -len(".landmarks.json")]
+        with np.load(lm.parent / "meshes.npz") as z:
+            mesh = next(f"{stem}{e}" for e in (".obj", ".ply") if f"{stem}{e}/vertices" in z.files)
+        data(f"{lm.parent.name}/{mesh}")
+        out.append(data(f"{lm.parent.name}/{lm.name}"))
+    return sorted(out)
+
+
+def _atomic_write(path, content):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(content)
+        os.chmod(tmp, 0o444)  # read-only, like the shared data set: a test must not change its inputs
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def mesh_bytes(z, name, rel=None):
+    """The file ``name`` of an open ``meshes.npz`` as bytes (OBJ text or binary little-endian PLY).
+
+    OBJ vertices are written with the shortest decimal that reads back as the stored value (float32
+    values: numpy's shortest float32 repr, which for the 6-7 significant digits of the original
+    files is the original decimal, so reading it as float64 gives the original float64 exactly);
+    faces are written as the original polygons, in the original order (no texture indices).
+    """
+    V = z[f"{name}/vertices"]
+    if name.endswith(".ply"):
+        F = z[f"{name}/faces"].astype("<i4")
+        rgba = z[f"{name}/rgba"] if f"{name}/rgba" in z.files else None
+        head = ["ply", "format binary_little_endian 1.0"]
+        head += [f"comment {c}" for c in z[f"{name}/comments"].tolist()] if f"{name}/comments" in z.files else []
+        head += [f"element vertex {len(V)}", "property float x", "property float y", "property float z"]
+        fields = [("xyz", "<f4", (3,))]
+        if rgba is not None:
+            head += [f"property uchar {c}" for c in ("red", "green", "blue", "alpha")[: rgba.shape[1]]]
+            fields.append(("rgba", "u1", (rgba.shape[1],)))
+        head += [f"element face {len(F)}", "property list uchar int vertex_indices", "end_header"]
+        verts = np.empty(len(V), dtype=fields)
+        verts["xyz"] = V
+        if rgba is not None:
+            verts["rgba"] = rgba
+        faces = np.empty(len(F), dtype=[("n", "u1"), ("idx", "<i4", (3,))])
+        faces["n"] = 3
+        faces["idx"] = F
+        return ("\n".join(head) + "\n").encode("ascii") + verts.tobytes() + faces.tobytes()
+    topo = str(z[f"{name}/topology"])
+    sizes, index = z[f"{topo}/sizes"], z[f"{topo}/index"].astype(np.int64) + 1
+    fmt = str if V.dtype == np.float32 else (lambda x: repr(float(x)))
+    lines = [f"# {rel or name}: written by tests/shared_data.py from tests/data (source, licence: tests/data/LICENSES.md)"]
+    lines += [f"v {fmt(x)} {fmt(y)} {fmt(w)}" for x, y, w in V]
+    ends = np.cumsum(sizes)
+    flat = index.tolist()
+    lines += ["f " + " ".join(map(str, flat[e - n:e])) for n, e in zip(sizes.tolist(), ends.tolist())]
+    return ("\n".join(lines) + "\n").encode("ascii")
 
 
 def icosphere(subdivisions=3, radius=1.0):

@@ -13,12 +13,14 @@ import numpy as np
 import pytest
 
 import autobones
-from autobones.landmarks.detect import (DetectedLandmarks, LandmarkDetector, MEDIAPIPE_POINTS, lift, refine,
-                              symmetry_plane, weighted_median)
+from autobones.landmarks.detect import DetectedLandmarks, LandmarkDetector
+from autobones.landmarks.mediapipe import MEDIAPIPE_POINTS
+from autobones.landmarks.refine import refine, symmetry_plane
+from autobones.landmarks.views import lift, weighted_median
 from autobones.errors import AutobonesError
 from autobones.io.landmarks import NAMES, mirror_name, read_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.placement.pipeline import default_head
+from autobones.io.mesh import default_head
 from shared_data import ROOT, data
 
 CLI = [sys.executable, "-m", "cli.main"]
@@ -211,7 +213,7 @@ def test_face_only_scan_is_never_read_from_the_inside():
 
 
 def test_implausible_landmarks_are_refused():
-    from autobones.landmarks.detect import plausible
+    from autobones.landmarks.orientation import plausible
     from autobones.orient import Frame
 
     frame = Frame(rotation=np.eye(3), origin=np.zeros(3), size=1.0)
@@ -239,7 +241,7 @@ def test_missing_detector_names_the_extra(monkeypatch):
 
 def test_views_that_disagree_drop_the_name():
     """A detector that puts one point in a different place in every view: that name is dropped."""
-    from autobones.landmarks.detect import MediaPipeFaceMesh
+    from autobones.landmarks.mediapipe import MediaPipeFaceMesh
 
     real = MediaPipeFaceMesh()
     calls = itertools.count()
@@ -331,3 +333,26 @@ def test_batch_transfer_detects_where_no_landmark_file_is(tmp_path):
     assert report["files"][0]["landmarks"] == "detected"
     side = json.loads((tmp_path / "out" / "james.rig.json").read_text())
     assert side["options"]["landmarks_source"] == "detected"
+
+
+def test_turns_are_the_24_axis_rotations_after_the_identity_frame():
+    from autobones.landmarks.orientation import turn_degrees, turns
+
+    R = list(turns())
+    assert R[0] is None and list(turns(search=False)) == [None]
+    R = R[1:]
+    assert len(R) == 24 and len({tuple(np.rint(M).astype(int).ravel()) for M in R}) == 24
+    for M in R:
+        assert np.allclose(M @ M.T, np.eye(3)) and np.isclose(np.linalg.det(M), 1.0)
+    assert sum(turn_degrees(M, np.eye(3)) < 1e-6 for M in R) == 1
+    assert sorted({round(turn_degrees(M, np.eye(3))) for M in R}) == [0, 90, 120, 180]
+
+
+def test_quiet_stderr_restores_file_descriptor_2():
+    from autobones.landmarks.mediapipe import quiet_stderr
+
+    before = os.fstat(2)
+    with quiet_stderr():
+        os.write(2, b"")
+    after = os.fstat(2)
+    assert (before.st_dev, before.st_ino) == (after.st_dev, after.st_ino)

@@ -3,7 +3,7 @@
 The ``.glb`` written by ``Rig.save`` is read back by pygltflib (a second glTF library;
 accessors decoded here with numpy), by trimesh, checked by the Khronos glTF validator
 (node, ``tools/gltf-validator``) and imported into Blender 3.4 (``tests/blender_check.py``),
-on real heads from ``../shared/data``: LeePerrySmith (one welded surface), the ICT
+on real heads from ``tests/data``: LeePerrySmith (one welded surface), the ICT
 neutral head (56 parts: eyes, teeth, ...) and the unwelded low-poly robot head.
 
 Node and Blender are required: when either is missing the tests fail with the command
@@ -11,7 +11,9 @@ that installs it, they do not skip.
 """
 import json
 import math
+import os
 import shutil
+import struct
 import subprocess
 import warnings
 from pathlib import Path
@@ -22,16 +24,19 @@ import pytest
 import trimesh
 
 import autobones
-from autobones.io.gltf import top_influences
+from autobones.io.gltf import (FLOAT, UBYTE, UINT, USHORT, GlbBuffer, glb_bytes, joint_nodes, pack_glb,
+                               read_glb, skin_for, top_influences)
+from autobones.io.gltf import read_accessor as read_glb_accessor
+from autobones.io.posed import write_posed_mesh
+from autobones.skeleton import Skeleton
 
-from shared_data import run_blender_check
+from shared_data import data, run_blender_check
 
 REPO = Path(__file__).resolve().parents[1]
-DATA = REPO.parent / "shared" / "data"
 MESHES = {
-    "lps": DATA / "misc" / "LeePerrySmith.obj",
-    "ict": DATA / "ict" / "generic_neutral_mesh.obj",
-    "robot": DATA / "misc" / "robot_head_neutral.obj",
+    "lps": data("misc/LeePerrySmith.obj"),
+    "ict": data("ict/generic_neutral_mesh.obj"),
+    "robot": data("misc/robot_head_neutral.obj"),
 }
 DENSITY = 4  # facial bones: enough to exercise face_XX joints, small enough to stay fast
 VALIDATOR_DIR = REPO / "tools" / "gltf-validator"
@@ -346,3 +351,184 @@ def test_blender_rotating_a_facial_bone_moves_vertices_near_it(blender_report, n
     # displacement can be a separate part, e.g. the robot's ear, riding its nearest bone rigidly)
     assert np.linalg.norm(np.array(pose["strongly_moved_centroid"]) - pivot) < 0.4 * size, msg
     assert pose["top_displacement"] < 0.25 * pose["max_displacement"], msg
+
+
+# --------------------------------------------------------------------------- the container writer's parts
+
+def _random_skeleton(rng, n_bones):
+    """A random tree of bones (each parent before its children), heads and tails apart."""
+    parents = np.array([-1] + [int(rng.integers(0, i)) for i in range(1, n_bones)])
+    heads = rng.normal(size=(n_bones, 3))
+    tails = heads + rng.normal(size=(n_bones, 3))
+    tails[0] = heads[0] + [0.0, 0.0, 1.0]  # +-Z bones take the other reference axis in _bone_rotations
+    return Skeleton([f"b{i}" for i in range(n_bones)], parents, heads, tails)
+
+
+def test_pack_glb_round_trips_through_read_glb():
+    rng = np.random.default_rng(0)
+    for n in (0, 4, 8, 400):
+        doc = {"asset": {"version": "2.0"}, "x": "é" * int(rng.integers(0, 7))}  # JSON of any length
+        body = rng.integers(0, 256, n, dtype=np.uint8).tobytes()
+        data = pack_glb(doc, body)
+        assert len(data) % 4 == 0 and struct.unpack_from("<I", data, 8)[0] == len(data)
+        assert struct.unpack_from("<I", data, 12)[0] % 4 == 0  # the JSON chunk keeps BIN aligned
+        assert read_glb_bytes(data) == (doc, body)
+
+
+def read_glb_bytes(data):
+    """read_glb of bytes (through a temporary file)."""
+    import tempfile
+
+    with tempfile.NamedTemporaryFile(suffix=".glb", delete=False) as fh:
+        fh.write(data)
+    try:
+        return read_glb(fh.name)
+    finally:
+        Path(fh.name).unlink()
+
+
+def test_glb_buffer_aligns_views_and_round_trips_accessors():
+    rng = np.random.default_rng(1)
+    buf = GlbBuffer()
+    arrays = [(rng.integers(0, 255, (5, 4)).astype(np.uint8), UBYTE, "VEC4"),  # 20 bytes
+              (rng.integers(0, 9, 3).astype(np.uint32), UINT, "SCALAR"),
+              (rng.integers(0, 999, (3, 4)).astype(np.uint16), USHORT, "VEC4"),  # 24 bytes
+              (rng.integers(0, 255, (3, 4)).astype(np.uint8), UBYTE, "VEC4"),  # 12 bytes
+              (rng.normal(size=(7, 3)).astype(np.float32), FLOAT, "VEC3")]
+    indices = [buf.add(a, c, t, minmax=(t == "VEC3")) for a, c, t in arrays]
+    assert indices == list(range(len(arrays)))
+    body = buf.body()
+    assert len(body) == buf.byte_length() and len(body) % 4 == 0
+    doc = {"accessors": buf.accessors, "bufferViews": buf.views}
+    for i, (a, _, _) in enumerate(arrays):
+        assert buf.views[i]["byteOffset"] % 4 == 0
+        got = read_glb_accessor(doc, body, i)
+        np.testing.assert_array_equal(got.reshape(a.shape), a)
+    assert buf.accessors[4]["min"] == arrays[4][0].min(axis=0).tolist()
+    assert buf.accessors[4]["max"] == arrays[4][0].max(axis=0).tolist()
+
+
+def test_joint_nodes_compose_to_the_inverse_bind_matrices_and_place_markers():
+    rng = np.random.default_rng(2)
+    skel = _random_skeleton(rng, 9)
+    markers = [("m0", "b3", rng.normal(size=3)), ("m1", "b0", rng.normal(size=3))]
+    nodes, ibm = joint_nodes(skel, markers)
+    assert len(nodes) == len(skel) + len(markers) and ibm.shape == (len(skel), 16) and ibm.dtype == np.float32
+    gltf = pygltflib.GLTF2(nodes=[pygltflib.Node(**n) for n in nodes])
+    G = global_matrices(gltf)
+    for b in range(len(skel)):
+        inv_bind = ibm[b].reshape(4, 4).T.astype(np.float64)  # column-major
+        np.testing.assert_allclose(G[b] @ inv_bind, np.eye(4), atol=1e-5)
+        np.testing.assert_allclose(G[b][:3, 1], (skel.tails[b] - skel.heads[b])
+                                   / np.linalg.norm(skel.tails[b] - skel.heads[b]), atol=1e-12)  # +Y head -> tail
+    for k, (_, bone, position) in enumerate(markers):
+        i = len(skel) + k
+        assert node_parents(gltf)[i] == skel.index(bone)
+        np.testing.assert_allclose(G[i][:3, 3], position, atol=1e-12)
+
+
+def test_skin_for_joint_index_type_follows_the_bone_count():
+    rng = np.random.default_rng(3)
+    for n_bones, dtype in ((3, np.uint8), (256, np.uint8), (257, np.uint16)):
+        skel = _random_skeleton(rng, n_bones)
+        W = rng.random((20, n_bones))
+        skin = skin_for(skel, W / W.sum(1, keepdims=True), 4)
+        assert skin.joints.dtype == dtype and skin.joints.shape == (20, 4) and skin.roots == [0]
+        assert skin.joints.max() < n_bones and np.allclose(skin.weights.sum(1), 1, atol=1e-6)
+
+
+def test_static_glb_is_the_skinned_file_minus_the_skin():
+    rng = np.random.default_rng(4)
+    V, F = rng.normal(size=(6, 3)), np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0]])
+    skel = _random_skeleton(rng, 2)
+    static = read_glb_bytes(glb_bytes(V, F))[0]
+    skinned = read_glb_bytes(glb_bytes(V, F, skin=skin_for(skel, np.full((6, 2), 0.5))))[0]
+    assert "skins" not in static and static["nodes"] == [{"name": "head_mesh", "mesh": 0}]
+    assert static["scenes"] == [{"nodes": [0]}]
+    assert static["accessors"] == skinned["accessors"][:2]  # POSITION and indices, the same
+    assert static["meshes"][0]["primitives"][0]["attributes"] == {"POSITION": 0}
+    assert skinned["nodes"][-1] == {"name": "head_mesh", "mesh": 0, "skin": 0}
+
+
+# --------------------------------------------------------------------------- the posed (static) .glb
+
+@pytest.fixture(scope="module")
+def posed_glb(tmp_path_factory):
+    """(V, F, path): the robot head bent like a pose, written as ``autobones pose -o X.glb`` does."""
+    V, F = autobones.load_mesh(MESHES["robot"])
+    V = V + 0.05 * np.sin(V[:, [1, 2, 0]] / np.ptp(V, axis=0).max() * 7)
+    path = tmp_path_factory.mktemp("posed") / "posed.glb"
+    write_posed_mesh(path, V, F)
+    return V, F, path
+
+
+def test_posed_glb_arrays_equal_trimesh_export(posed_glb, tmp_path):
+    """The posed mesh was written by trimesh before the one container writer: the same arrays."""
+    V, F, path = posed_glb
+    other = tmp_path / "trimesh.glb"
+    other.write_bytes(trimesh.Trimesh(V, F, process=False, validate=False).export(file_type="glb"))
+    ours, theirs = (pygltflib.GLTF2().load_binary(str(p)) for p in (path, other))
+    pa, pb = ours.meshes[0].primitives[0], theirs.meshes[0].primitives[0]
+    np.testing.assert_array_equal(read_accessor(ours, pa.attributes.POSITION),
+                                  read_accessor(theirs, pb.attributes.POSITION))
+    np.testing.assert_array_equal(read_accessor(ours, pa.indices), read_accessor(theirs, pb.indices))
+    np.testing.assert_array_equal(read_accessor(ours, pa.attributes.POSITION), V.astype(np.float32))
+    mesh = trimesh.load(path, force="mesh", process=False)
+    np.testing.assert_array_equal(mesh.vertices, V.astype(np.float32))
+    np.testing.assert_array_equal(mesh.faces, F)
+    assert ours.skins == [] and all(n.skin is None for n in ours.nodes)
+
+
+def test_posed_glb_khronos_validator_reports_no_issues(posed_glb):
+    V, F, path = posed_glb
+    report = run_validator(path)
+    issues = report["issues"]
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
+    info = report["info"]
+    assert not info["hasSkins"] and info["totalVertexCount"] == len(V) and info["totalTriangleCount"] == len(F)
+
+
+BLENDER_STATIC = """
+import json, sys
+import bpy
+import numpy as np
+if "bool" not in vars(np):  # Blender 3.4's importer still uses np.bool, removed in numpy 1.24
+    np.bool = bool
+glb, out = sys.argv[sys.argv.index("--") + 1:]
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.import_scene.gltf(filepath=glb)
+objs = bpy.context.scene.objects
+meshes = [o for o in objs if o.type == "MESH"]
+rep = {"meshes": len(meshes), "armatures": sum(o.type == "ARMATURE" for o in objs)}
+if meshes:
+    o = meshes[0]
+    # Blender is Z-up: glTF (x, y, z) comes in as (x, -z, y)
+    rep["vertices"] = [[w.x, w.z, -w.y] for w in (o.matrix_world @ v.co for v in o.data.vertices)]
+    rep["polygon_sizes"] = [len(p.vertices) for p in o.data.polygons]
+with open(out, "w") as fh:
+    json.dump(rep, fh)
+"""
+
+
+@pytest.mark.slow
+def test_blender_imports_the_posed_glb(posed_glb, tmp_path):
+    V, F, path = posed_glb
+    blender = shutil.which("blender")
+    if blender is None:
+        pytest.fail("blender is not on PATH; install it with: apt-get install blender python3-numpy")
+    script, out = tmp_path / "static.py", tmp_path / "static.json"
+    script.write_text(BLENDER_STATIC)
+    # as tests/shared_data.run_blender_check: Blender's own Python, not the one running pytest
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHOME", "PYTHONPATH")}
+    env["PATH"] = str(Path(blender).resolve().parent) + ":" + env.get("PATH", "")
+    run = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P", str(script),
+                          "--", str(path), str(out)], capture_output=True, text=True, timeout=300, env=env)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    rep = json.loads(out.read_text())
+    assert rep["meshes"] == 1 and rep["armatures"] == 0
+    assert rep["polygon_sizes"] == [3] * len(F)
+    from scipy.spatial import cKDTree
+
+    B = np.array(rep["vertices"])
+    tol = 1e-6 * np.ptp(V, axis=0).max()
+    assert cKDTree(B).query(V)[0].max() <= tol and cKDTree(V).query(B)[0].max() <= tol

@@ -14,9 +14,9 @@ from autobones.io.landmarks import (
 from autobones.io.mesh import load_mesh
 from autobones.orient import detect_frame
 
-from shared_data import DATA, data
+from shared_data import data, landmark_files
 
-SHARED = sorted(DATA.glob("*/*.landmarks.json"))
+SHARED = landmark_files()
 
 
 def _error(fn, *args, **kwargs):
@@ -477,3 +477,19 @@ def test_huge_finite_coordinates_do_not_overflow(tmp_path, ict):
     V, F = ict[0], ict[1]
     far = {n: p * 1e305 for n, p in ict[3].items()}
     assert "far from the mesh" in _error(validate_landmarks, far, V, F)
+
+
+def test_quoted_file_values_stay_short_and_on_one_line():
+    from autobones.io.landmark_checks import quoted, shorten
+
+    assert shorten("a \n\t b") == "a b"
+    long = "x" * 30 + "\n" + "y" * 80
+    assert len(shorten(long)) == 60 and shorten(long).endswith("...") and "\n" not in shorten(long)
+    assert "\n" not in quoted(long) and len(quoted(long)) <= 42 and quoted("nasion") == "'nasion'"
+    assert quoted(12345678901234567890 ** 3).endswith("...")
+
+
+def test_name_index_is_the_position_in_names():
+    from autobones.io.landmark_names import NAME_INDEX
+
+    assert [NAMES[i] for i in NAME_INDEX.values()] == list(NAME_INDEX) == list(NAMES)

@@ -1,18 +1,17 @@
 """Tests for autobones.render: coverage, depth, ids, lifting pixels back to 3-D."""
-from pathlib import Path
-
 import numpy as np
 import pytest
 import trimesh
 
 from autobones.errors import AutobonesError
-from autobones.render.rasterize import (
+from autobones.render import (
     Camera, RenderBuffers, draw_points, draw_segments, look_at, orthographic_camera,
     rasterize, render_views, save_png, shade, surface_points,
 )
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "misc"
-LPS = DATA / "LeePerrySmith.obj"
+from shared_data import data
+
+LPS = data("misc/LeePerrySmith.obj")
 
 
 @pytest.fixture(scope="module")
@@ -313,3 +312,35 @@ def test_large_mesh_renders():
     img = shade(m.vertices, m.faces, buf)
     assert img.shape == (800, 800, 3)
     assert buf.mask.sum() > 0.3 * 800 * 800
+
+
+def test_unit_vector_keeps_the_direction_and_refuses_non_vectors():
+    from autobones.render.camera import unit_vector
+
+    v = unit_vector([3.0, -4.0, 12.0], "v")
+    assert np.isclose(np.linalg.norm(v), 1.0) and np.allclose(v * 13.0, [3.0, -4.0, 12.0])
+    for bad in ([0, 0, 0], [1, np.nan, 0], [1, 2]):
+        with pytest.raises(AutobonesError, match="v must"):
+            unit_vector(bad, "v")
+
+
+def test_image_size_takes_a_pair_of_positive_ints():
+    from autobones.render.camera import image_size
+
+    assert image_size((64.0, 32)) == (64, 32)
+    for bad in ((0, 4), (4,), "ab", None):
+        with pytest.raises(AutobonesError, match="image size"):
+            image_size(bad)
+
+
+def test_batch_size_does_not_change_the_depth_buffer(sphere, monkeypatch):
+    """Rasterising in many small batches covers the same pixels at the same depths as in one."""
+    import importlib
+
+    raster = importlib.import_module("autobones.render.rasterize")
+    V, F = sphere
+    cam = orthographic_camera(V, (0.3, 0.2, 1.0), size=(96, 80))
+    whole = rasterize(V, F, cam)
+    monkeypatch.setattr(raster, "_BATCH", 257)
+    pieces = rasterize(V, F, cam)
+    assert np.array_equal(whole.mask, pieces.mask) and np.array_equal(whole.depth, pieces.depth)

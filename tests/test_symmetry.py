@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import autobones
-from autobones.landmarks.detect import symmetry_plane
+from autobones.landmarks.refine import symmetry_plane
 from autobones.expressions.model import ExpressionModel
 from autobones.rig_transfer.correspondence import dense_correspondence
 from autobones.geometry.rotations import axis_turn

@@ -1,9 +1,9 @@
-"""Read, write and check landmark files: the 44-name contract of ``spec/landmarks.md``.
+"""Read and write landmark files: the 44-name contract of ``spec/landmarks.md``.
 
-Seed 004 §2 tags the generic rig with 44 anthropometric landmarks (lambda) and
-§3 the face model with any subset of them (phi, "positioned manually by the
-artist"); the transfer (§3.1) fits a thin-plate spline between the two. The seed takes the landmarks as given;
-this module goes beyond it to read them from the files users already have:
+Orvalho, Zacur & Susin 2008 (§2) tag the generic rig with 44 anthropometric landmarks
+(lambda) and (§3) the face model with any subset of them (phi, "positioned manually by the
+artist"); the transfer (§3.1) fits a thin-plate spline between the two. They take the
+landmarks as given; this module goes beyond them to read them from the files users already have:
 
 - the contract JSON (``"format": "autobones-landmarks/1"``, names -> 3-vectors);
 - MeshLab picked points (``.pp``, XML ``<point name= x= y= z= active=/>``);
@@ -14,46 +14,30 @@ this module goes beyond it to read them from the files users already have:
 The format is recognised by content, not extension. Coordinates are kept in
 the mesh's own frame and units; nothing is converted. Every problem with a
 file is one :class:`~autobones.errors.AutobonesError` naming the file, never a
-parser traceback. :func:`validate_landmarks` adds the checks that need the
-mesh: distance to the surface (with a hint when the units differ) and a
-left/right swap test in the head's canonical frame.
+parser traceback. The names table lives in :mod:`autobones.io.landmark_names` and the
+checks (:func:`validate_landmarks`: names, values, distance to the surface, left/right
+swaps) in :mod:`autobones.io.landmark_checks`; both are re-exported here.
 """
 from __future__ import annotations
 
-import difflib
 import json
 import logging
 import os
 import re
-from collections.abc import Mapping
 
 import numpy as np
 
 from ..errors import AutobonesError
 from .atomic import write_text_atomic
+from .landmark_checks import quoted, shorten, validate_landmarks
+from .landmark_names import BILATERAL, MIDLINE, NAME_INDEX, NAMES, mirror_name
+
+__all__ = ["BILATERAL", "FORMAT", "IBUG68", "IBUG_COUNT", "MIDLINE", "NAMES", "NAME_INDEX", "mirror_name",
+           "read_landmarks", "resolve_landmarks", "validate_landmarks", "write_landmarks"]
 
 log = logging.getLogger(__name__)
 
 FORMAT = "autobones-landmarks/1"
-
-#: Midline names, top of the head to the chin then around (spec order).
-MIDLINE = (
-    "vertex", "opisthocranion", "glabella", "nasion", "pronasale", "subnasale",
-    "labiale_superius", "stomion", "labiale_inferius", "sublabiale", "pogonion", "menton",
-)
-
-#: Bilateral base names; each exists as ``NAME_l`` (subject's left) and ``NAME_r``.
-BILATERAL = (
-    "exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius",
-    "brow_inner", "brow_middle", "brow_outer", "alare", "crista_philtri", "cheilion",
-    "zygion", "gonion", "tragion", "superaurale", "subaurale", "frontotemporale",
-)
-
-#: The 44 contract names in their fixed order: the 12 midline names, then for
-#: each bilateral base name in :data:`BILATERAL` order ``NAME_l`` then ``NAME_r``.
-NAMES = MIDLINE + tuple(f"{base}_{side}" for base in BILATERAL for side in ("l", "r"))
-
-_ORDER = {name: i for i, name in enumerate(NAMES)}
 
 #: iBUG-68 (0-based) indices averaged to give each contract name. Points 36-41
 #: are the subject's right eye, 42-47 the left.
@@ -76,28 +60,6 @@ IBUG_COUNT = 68
 
 # Landmark files are tiny; anything larger is not one.
 MAX_FILE_BYTES = 16 * 1024**2
-
-# Global scales tried when landmarks miss the surface, and what each one means.
-_UNIT_HINTS = (
-    (0.001, "millimetres for a mesh in metres"),
-    (1000.0, "metres for a mesh in millimetres"),
-    (0.1, "millimetres for a mesh in centimetres"),
-    (10.0, "centimetres for a mesh in millimetres"),
-    (0.01, "centimetres for a mesh in metres"),
-    (100.0, "metres for a mesh in centimetres"),
-)
-
-
-def mirror_name(name):
-    """The same landmark on the other side: ``'x_l'`` <-> ``'x_r'``; a midline name is itself.
-
-    Raises ``ValueError`` for a name outside :data:`NAMES`.
-    """
-    if name not in _ORDER:
-        raise ValueError(f"{name!r} is not a landmark name of the contract")
-    if name in MIDLINE:
-        return name
-    return name[:-1] + ("r" if name.endswith("_l") else "l")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -165,7 +127,7 @@ def read_landmarks(path):
         raise AutobonesError(f"{path}: the file is nested too deeply or too large to be a landmark file") from None
     except Exception as exc:  # any other parser failure is the file's fault
         raise AutobonesError(
-            f"{path}: not a readable landmark file ({exc.__class__.__name__}: {_short(str(exc))})") from None
+            f"{path}: not a readable landmark file ({exc.__class__.__name__}: {shorten(str(exc))})") from None
     return validate_landmarks(landmarks, min_count=1, source=path)
 
 
@@ -199,14 +161,14 @@ def _parse(raw, path):
             data = json.loads(body, object_pairs_hook=_no_duplicates)
         except _Duplicate as dup:
             raise AutobonesError(
-                f"{path}: key {_q(dup.key)} appears twice; give each landmark once") from None
+                f"{path}: key {quoted(dup.key)} appears twice; give each landmark once") from None
         except json.JSONDecodeError as exc:
             if _looks_like_pts(body):
                 return _parse_pts(body, path)
             raise AutobonesError(
                 f"{path}: not valid JSON (line {exc.lineno} column {exc.colno}: {exc.msg})") from None
         except ValueError as exc:  # e.g. an integer with thousands of digits
-            raise AutobonesError(f"{path}: not valid JSON ({_short(str(exc))})") from None
+            raise AutobonesError(f"{path}: not valid JSON ({shorten(str(exc))})") from None
         return _from_json(data, path)
     if body[0] == "<":
         return _parse_pp(body, path)
@@ -214,7 +176,7 @@ def _parse(raw, path):
         return _parse_pts(body, path)
     if ext in (".json", ".ljson", ".pp"):
         kind = "XML" if ext == ".pp" else "JSON"
-        raise AutobonesError(f"{path}: not {kind} (it starts with {_q(body[:20])}); not a landmark file")
+        raise AutobonesError(f"{path}: not {kind} (it starts with {quoted(body[:20])}); not a landmark file")
     raise AutobonesError(
         f"{path}: not a landmark file; expected autobones JSON, a MeshLab .pp, "
         f"or an iBUG-68 list (.json, .pts, .ljson)")
@@ -227,7 +189,7 @@ def _from_json(data, path):
         raise AutobonesError(f"{path}: JSON {type(data).__name__} is not a landmark file")
     fmt = data.get("format")
     if fmt is not None and fmt != FORMAT:
-        raise AutobonesError(f"{path}: unknown format {_q(fmt)}; expected {FORMAT!r}")
+        raise AutobonesError(f"{path}: unknown format {quoted(fmt)}; expected {FORMAT!r}")
     if "landmarks" not in data:
         if "groups" in data:  # menpo ljson version 1
             return _from_ljson_v1(data["groups"], path)
@@ -247,7 +209,7 @@ def _from_json(data, path):
         raise AutobonesError(f"{path}: 'landmarks' is empty; add at least 10 named landmarks")
     out = {}
     for key, value in lms.items():
-        out[_add(out, key, path)] = _triple(value, path, f"landmark {_q(key)}")
+        out[_add(out, key, path)] = _triple(value, path, f"landmark {quoted(key)}")
     return out
 
 
@@ -315,7 +277,7 @@ def _parse_pts(body, path):
             try:
                 n_points = int(value.strip())
             except ValueError:
-                raise AutobonesError(f"{path}:{i + 1}: n_points {_q(value.strip())} is not a whole number") from None
+                raise AutobonesError(f"{path}:{i + 1}: n_points {quoted(value.strip())} is not a whole number") from None
     if start is None:
         raise AutobonesError(f"{path}: no '{{' opening the point list; not an iBUG .pts file")
     rows, closed = [], False
@@ -334,7 +296,7 @@ def _parse_pts(body, path):
         try:
             rows.append([float(p) for p in parts])
         except ValueError:
-            raise AutobonesError(f"{path}:{i + 1}: {_q(line)} is not three numbers") from None
+            raise AutobonesError(f"{path}:{i + 1}: {quoted(line)} is not three numbers") from None
     if not closed:
         raise AutobonesError(f"{path}: the point list is not closed with '}}'; the file is truncated")
     if n_points is not None and n_points != len(rows):
@@ -382,11 +344,11 @@ def _parse_pp(body, path):
         coords = []
         for axis in "xyz":
             if axis not in attrs:
-                raise AutobonesError(f"{path}: point {_q(name)} has no {axis} coordinate")
+                raise AutobonesError(f"{path}: point {quoted(name)} has no {axis} coordinate")
             try:
                 coords.append(float(attrs[axis]))
             except ValueError:
-                raise AutobonesError(f"{path}: point {_q(name)}: {axis}={_q(attrs[axis])} is not a number") from None
+                raise AutobonesError(f"{path}: point {quoted(name)}: {axis}={quoted(attrs[axis])} is not a number") from None
         out[_add(out, name, path)] = np.array(coords)
     if not out:
         raise AutobonesError(f"{path}: every point is inactive (active=\"0\"); no landmarks to use")
@@ -397,7 +359,7 @@ def _add(out, key, path):
     """Normalise a file's landmark name (surrounding space, case) and refuse a repeat."""
     name = key.strip().lower() if isinstance(key, str) else key
     if name in out:
-        raise AutobonesError(f"{path}: landmark {_q(name)} appears twice; give each landmark once")
+        raise AutobonesError(f"{path}: landmark {quoted(name)} appears twice; give each landmark once")
     return name
 
 
@@ -410,7 +372,7 @@ def _triple(value, path, what, allow_all_nan=False):
         raise AutobonesError(f"{path}: {what} has {len(value)} coordinates; expected [x, y, z]")
     for v in value:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise AutobonesError(f"{path}: {what} has a coordinate that is not a number ({_q(v)})")
+            raise AutobonesError(f"{path}: {what} has a coordinate that is not a number ({quoted(v)})")
     try:
         p = np.array([float(v) for v in value], dtype=np.float64)
     except OverflowError:
@@ -423,16 +385,6 @@ def _triple(value, path, what, allow_all_nan=False):
 def _json_type(value):
     return {dict: "object", list: "array", str: "string", bool: "boolean", type(None): "null",
             int: "number", float: "number"}.get(type(value), type(value).__name__)
-
-
-def _short(text, limit=60):
-    text = " ".join(str(text).split())
-    return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
-def _q(value):
-    """A value from a file, quoted and cut short so a message stays one line."""
-    return repr(_short(value, 40)) if isinstance(value, str) else _short(repr(value), 40)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -486,187 +438,3 @@ def write_landmarks(path, landmarks, mesh_name=None, confidence=None):
     lines.append("}")
     text = "\n".join(lines) + "\n"
     write_text_atomic(path, text, "the landmark file")
-
-
-# ---------------------------------------------------------------------------------------------
-# checking
-
-def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, source="landmarks",
-                       max_off_surface=0.05):
-    """Check a landmark dict against the contract and, optionally, the mesh it belongs to.
-
-    Parameters
-    ----------
-    landmarks : mapping str -> (3,) float
-        Contract names -> positions in the mesh's own frame and units.
-    V : (n, 3) float or None
-        Mesh vertices, same frame and units as the landmarks.
-    F : (m, 3) int or None
-        Mesh triangles; given together with ``V``.
-    frame : autobones.orient.Frame or None
-        The head's canonical frame (``autobones.orient.detect_frame(V, F)``);
-        enables the left/right check.
-    min_count : int
-        Fewest landmarks accepted (the transfer needs about 10 well spread).
-    source : str
-        What to call the landmarks in messages, usually the file name.
-    max_off_surface : float
-        Largest distance from the surface, in head sizes (the largest
-        bounding-box extent of ``V``).
-
-    Returns
-    -------
-    dict[str, (3,) float64]
-        Fresh arrays in :data:`NAMES` order.
-
-    Raises
-    ------
-    AutobonesError
-        One line naming ``source`` and the offending landmarks, for: unknown
-        names (with the closest valid name), values that are not 3 finite
-        numbers, fewer than ``min_count`` landmarks, two landmarks at the same
-        point, all landmarks on one line, landmarks farther than
-        ``max_off_surface`` from the mesh (with a hint when a global scale by
-        1000, 100, 10, 0.1, 0.01 or 0.001 would put them on it: mismatched
-        units), and, when ``frame`` is given, ``_l`` / ``_r`` exchanged: in
-        canonical coordinates (+X is the subject's left) every ``_l`` point
-        must lie at larger x than its ``_r`` partner. Without a frame the
-        left/right check is skipped: the landmarks alone do not tell which
-        side is the subject's left.
-    """
-    if not isinstance(landmarks, Mapping):
-        raise AutobonesError(f"{source}: landmarks must map names to [x, y, z], got {type(landmarks).__name__}")
-    unknown = [k for k in landmarks if k not in _ORDER]
-    if unknown:
-        raise AutobonesError(f"{source}: unknown landmark name{'s' if len(unknown) > 1 else ''} "
-                             + _list(_suggest(k) for k in unknown)
-                             + "; use the contract's names (spec/landmarks.md, autobones.io.landmarks.NAMES)")
-    clean, bad = {}, []
-    for name in sorted(landmarks, key=_ORDER.get):
-        try:
-            p = np.array(landmarks[name], dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
-            p = None
-        if p is None or p.shape != (3,) or not np.isfinite(p).all():
-            bad.append(name)
-        else:
-            clean[name] = p
-    if bad:
-        raise AutobonesError(f"{source}: {_list(bad)} must be 3 finite numbers [x, y, z] (NaN, infinite or malformed)")
-    if len(clean) < min_count:
-        have = f" ({_list(clean)})" if clean else ""
-        raise AutobonesError(f"{source}: only {len(clean)} landmark{'s' if len(clean) != 1 else ''}{have}; "
-                             f"at least {min_count} well-spread landmarks are needed, add more")
-    if not clean:
-        return clean
-    names = list(clean)
-    P = np.array([clean[n] for n in names])
-    head = None
-    if V is not None or F is not None:
-        if V is None or F is None:
-            raise TypeError("validate_landmarks: V and F go together")
-        V = np.ascontiguousarray(V, dtype=np.float64)
-        F = np.ascontiguousarray(F, dtype=np.int64)
-        head = float((V.max(axis=0) - V.min(axis=0)).max())
-    _check_spread(P, names, head, source)
-    if head is not None:
-        _check_surface(P, names, V, F, head, source, max_off_surface)
-    if frame is not None:
-        _check_sides(clean, frame, source)
-    return clean
-
-
-def _check_spread(P, names, head, source):
-    # work on P / max|P| so that huge (finite) coordinates cannot overflow
-    m = float(np.abs(P).max())
-    Q = P / m if m > 0 else P
-    spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
-    if len(P) > 1 and spread == 0.0:
-        raise AutobonesError(f"{source}: all {len(P)} landmarks are at the same point {P[0].tolist()}; "
-                             f"place each where the contract describes it")
-    scale = head / m if head and m > 0 else spread
-    tol = 1e-7 * scale
-    if len(P) > 1:
-        from scipy.spatial import cKDTree
-
-        pairs = sorted(cKDTree(Q).query_pairs(tol))
-        if pairs:
-            shown = ", ".join(f"{names[i]} = {names[j]}" for i, j in pairs[:4])
-            more = f" and {len(pairs) - 4} more" if len(pairs) > 4 else ""
-            raise AutobonesError(f"{source}: landmarks at the same point ({shown}{more}); "
-                                 f"each landmark marks a different place, fix the copied coordinates")
-    if len(P) >= 3:
-        s = np.linalg.svd(Q - Q.mean(axis=0), compute_uv=False)
-        if s[1] <= 1e-6 * s[0]:
-            raise AutobonesError(f"{source}: all {len(P)} landmarks lie on one line; "
-                                 f"they must spread over the face (check for a dropped coordinate)")
-
-
-def _check_surface(P, names, V, F, head, source, max_off):
-    import igl
-
-    def off(Q):
-        if not np.isfinite(Q).all():
-            return np.full(len(Q), np.inf)
-        d2, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(Q), V, F)
-        return np.sqrt(np.asarray(d2, dtype=np.float64)) / head
-
-    d = off(P)
-    far = d > max_off
-    if not far.any():
-        return
-    order = np.argsort(-d)
-    worst = ", ".join(f"{names[i]} {d[i]:.2g}" for i in order[:min(4, int(far.sum()))])
-    more = f" and {int(far.sum()) - 4} more" if far.sum() > 4 else ""
-    msg = (f"{source}: {int(far.sum())} of {len(P)} landmarks lie far from the mesh surface "
-           f"({worst}{more} head sizes; at most {max_off:g} allowed)")
-    best = None
-    for scale, meaning in _UNIT_HINTS:
-        with np.errstate(over="ignore"):
-            scaled = P * scale
-        near = int((off(scaled) <= max_off).sum())
-        if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
-            best = (near, scale, meaning)
-    if best is not None:
-        _, scale, meaning = best
-        msg += (f"; wrong units? scaled by {scale:g} they lie on the surface, so they look like {meaning}: "
-                f"give the landmarks in the mesh's units")
-    else:
-        msg += "; landmarks must be in the mesh's own coordinates (same frame and units) and on its surface"
-    raise AutobonesError(msg)
-
-
-def _check_sides(clean, frame, source):
-    pairs = [b for b in BILATERAL if f"{b}_l" in clean and f"{b}_r" in clean]
-    if not pairs:
-        return
-    L = frame.to_canonical(np.array([clean[f"{b}_l"] for b in pairs]))
-    R = frame.to_canonical(np.array([clean[f"{b}_r"] for b in pairs]))
-    dx = L[:, 0] - R[:, 0]
-    inverted = dx < 0
-    if inverted.sum() * 2 > len(pairs):
-        raise AutobonesError(
-            f"{source}: left and right are swapped (mirrored set): in {int(inverted.sum())} of {len(pairs)} pairs "
-            f"the _l point is on the subject's right; _l is the subject's own left (the viewer's right in a "
-            f"frontal picture), exchange _l and _r (if they are right, the head's detected up or front is wrong: "
-            f"give them explicitly)")
-    clear = inverted & (dx < -0.01)  # a pair close to the midline may cross by a hair
-    if clear.any():
-        raise AutobonesError(
-            f"{source}: {_list(pairs[i] for i in np.flatnonzero(clear))} have _l and _r exchanged "
-            f"(the _l point lies on the subject's right); swap the names of that pair")
-
-
-def _suggest(name):
-    text = repr(_short(name, 40)) if isinstance(name, str) else _short(repr(name), 40)
-    if not isinstance(name, str):
-        return text
-    close = difflib.get_close_matches(name.strip().lower(), NAMES, n=1, cutoff=0.6)
-    return f"{text} (did you mean {close[0]!r}?)" if close else text
-
-
-def _list(items, limit=6):
-    items = [str(i) for i in items]
-    shown = items[:limit]
-    more = f" and {len(items) - limit} more" if len(items) > limit else ""
-    return ", ".join(shown) + more

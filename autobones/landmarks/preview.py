@@ -12,8 +12,9 @@ import numpy as np
 from ..errors import AutobonesError
 from ..io.atomic import output_folder
 from ..orient import detect_frame, frame_from_landmarks
-from .detect import face_camera
-from ..render.rasterize import draw_points, rasterize, save_png, shade
+from ..render.draw import draw_points, save_png
+from ..render.rasterize import rasterize, shade
+from .views import face_camera
 
 #: Marker colours: midline names, subject's left, subject's right (RGB).
 COLORS = {"mid": (220, 30, 30), "l": (20, 120, 230), "r": (20, 160, 60)}

@@ -1,0 +1,116 @@
+"""Pictures around the face and back to 3-D: cameras, lifting pixels to the surface, combining views.
+
+Frames: every function here works in the canonical head frame (+Y up, +Z out of the face,
++X toward the subject's left), in the mesh's units scaled by :class:`autobones.orient.Frame`
+(canonical units). Pixel coordinates are x = column, y = row, pixel centres at integers
+(:mod:`autobones.render.camera`).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry.areas import triangle_areas
+from ..geometry.topology import mesh_parts, weld
+from ..render.camera import Camera, look_at
+
+
+def view_direction(yaw, pitch):
+    """Unit (3,) canonical direction from the head toward a camera turned by ``yaw`` (toward
+    the subject's left, +X) and ``pitch`` (upward) degrees from straight ahead (+Z)."""
+    a, b = np.radians(yaw), np.radians(pitch)
+    return np.array([np.sin(a) * np.cos(b), np.sin(b), np.cos(a) * np.cos(b)])
+
+
+def face_camera(target, view_dir, width, size):
+    """An orthographic camera looking at ``target`` (3,) along ``-view_dir``, ``width`` canonical
+    units across the picture, ``size`` pixels square; world +Y shows upward."""
+    view = look_at(np.asarray(target) + 4.0 * np.asarray(view_dir), target, (0.0, 1.0, 0.0))
+    return Camera(view=view, scale=size / float(width), center=np.zeros(2), width=size, height=size)
+
+
+def skin_faces(V, F):
+    """(m,) bool: the triangles of the skin, the connected part with the largest area (after
+    welding coincident vertices), when it holds at least half the area; else every triangle.
+
+    Scanned or modelled heads often carry eyeballs, eyelashes, teeth in separate parts; a
+    landmark lifted from an oblique picture must land on the skin, not on an eyelash."""
+    area = triangle_areas(V, F)
+    _, _, index = weld(V, F, 1e-9 * max(float(np.ptp(V, axis=0).max()), 1e-300))
+    part = mesh_parts(int(index.max()) + 1, index[F])[index[F[:, 0]]]
+    totals = np.bincount(part, weights=area)
+    if totals.max() < 0.5 * totals.sum():
+        return np.ones(len(F), dtype=bool)
+    return part == int(np.argmax(totals))
+
+
+def lift(points_map, px, reach=3):
+    """Surface points under pixel positions.
+
+    Parameters
+    ----------
+    points_map : (H, W, 3) float
+        :func:`autobones.render.surface_points` (NaN where empty).
+    px : (k, 2) float
+        Pixel coordinates (x = column, y = row).
+    reach : int
+        An empty pixel takes the nearest covered pixel within this many pixels.
+
+    Returns
+    -------
+    (k, 3) float64
+        Bilinear interpolation of the four surrounding pixels' points where all four
+        are covered; else the nearest covered pixel within ``reach``; else NaN.
+    """
+    H, W, _ = points_map.shape
+    px = np.asarray(px, dtype=np.float64)
+    out = np.full((len(px), 3), np.nan)
+    x0 = np.floor(px[:, 0]).astype(np.int64)
+    y0 = np.floor(px[:, 1]).astype(np.int64)
+    inside = (x0 >= 0) & (y0 >= 0) & (x0 < W - 1) & (y0 < H - 1)
+    i = np.flatnonzero(inside)
+    fx = (px[i, 0] - x0[i])[:, None]
+    fy = (px[i, 1] - y0[i])[:, None]
+    c = [points_map[y0[i] + dy, x0[i] + dx] for dy, dx in ((0, 0), (0, 1), (1, 0), (1, 1))]
+    bil = (c[0] * (1 - fx) * (1 - fy) + c[1] * fx * (1 - fy) + c[2] * (1 - fx) * fy + c[3] * fx * fy)
+    ok = np.all(np.isfinite(bil), axis=1)
+    out[i[ok]] = bil[ok]
+    rest = np.flatnonzero(~np.all(np.isfinite(out), axis=1))
+    if len(rest):
+        covered = np.argwhere(np.isfinite(points_map[..., 0]))      # (c, 2) row, col
+        if len(covered):
+            d, j = cKDTree(covered[:, ::-1].astype(np.float64)).query(px[rest])
+            near = d <= reach
+            rc = covered[j[near]]
+            out[rest[near]] = points_map[rc[:, 0], rc[:, 1]]
+    return out
+
+
+def weighted_median(X, w):
+    """Per-coordinate weighted median of candidate points.
+
+    Parameters
+    ----------
+    X : (v, k, 3) float
+        ``v`` candidates for each of ``k`` points; NaN rows are ignored.
+    w : (v, k) float
+        Non-negative weights (0 ignores a candidate).
+
+    Returns
+    -------
+    (k, 3) float64
+        NaN where a point has no candidate with positive weight.
+    """
+    w = np.where(np.all(np.isfinite(X), axis=2), w, 0.0)
+    out = np.full(X.shape[1:], np.nan)
+    for d in range(3):
+        x = np.where(w > 0, X[..., d], np.inf)
+        order = np.argsort(x, axis=0)
+        xs = np.take_along_axis(x, order, axis=0)
+        ws = np.take_along_axis(w, order, axis=0)
+        cw = np.cumsum(ws, axis=0)
+        total = cw[-1]
+        idx = np.argmax(cw >= 0.5 * total[None], axis=0)
+        val = np.take_along_axis(xs, idx[None], axis=0)[0]
+        out[:, d] = np.where(total > 0, val, np.nan)
+    return out
