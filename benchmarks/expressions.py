@@ -352,7 +352,7 @@ def rotation_ceiling(model, X, pivot, degrees, glide=None):
     glide) to match the target positions ``X`` (n, 3, input frame). Free per-vertex angles are
     any weight field a joint could have, so this bounds what that joint can explain.
     Returns the fitted positions (n, 3), input frame."""
-    from autobones.expressions.model import x_turn
+    from autobones.geometry.rotations import x_turn
 
     Vc = model.canonical_
     D = model.frame_.to_canonical(X) - Vc

@@ -1,6 +1,6 @@
 """FACS action units as morph targets (blend shapes) for engines: one displacement field per AU.
 
-Goes beyond the seeds: seed 000's skin/muscle model (``expressions.ExpressionModel``) is
+Goes beyond the cited methods: the skin/muscle model of Bibliowicz 2005 (``expressions.ExpressionModel``) is
 evaluated once per action unit at intensity 1 on the rig's own head, and the displacement
 from the neutral mesh is what an engine adds, weighted, to the rest positions (glTF morph
 targets, Blender shape keys). The targets are exact at weights 0 and 1 one at a time; a mix,
@@ -16,8 +16,7 @@ import json
 import numpy as np
 
 from ..errors import AutobonesError
-
-SIDES = ("L", "R")
+from .definitions import parse_au_key
 
 
 def target_keys(action_units, which=True):
@@ -46,8 +45,7 @@ def target_keys(action_units, which=True):
         raise AutobonesError(f"morph targets: {which!r} is not True, 'sides' or a list of action units")
     out = []
     for k in which:
-        key = str(k).strip().upper().removeprefix("AU")
-        base = key[:-1] if key[-1:] in SIDES else key
+        key, base, _side = parse_au_key(k)
         if base not in aus:
             raise AutobonesError(f"morph targets: unknown action unit {k!r}; defined: {', '.join(aus)}")
         if key not in out:

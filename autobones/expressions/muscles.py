@@ -1,18 +1,18 @@
-"""Muscle joints: origin, insertion and contraction (seed 000 §4.2).
+"""Muscle joints: origin, insertion and contraction (Bibliowicz 2005, §4.2).
 
 A muscle is a joint from its origin under the skin to its insertion on the skin;
 a contraction is a scaling about the origin along the origin -> insertion
-direction. A point q riding the joint (000's locators, parented to the joint)
+direction. A point q riding the joint (Bibliowicz's locators, parented to the joint)
 moves, for a contraction that shortens the muscle by the fraction s, by
 
     -s ((q - o) . u) u,         u = (i - o) / |i - o|,
 
 which is linear in s: that is what keeps the whole skin/muscle model linear in the
 contractions (``expressions.ExpressionModel``). A negative s lengthens the joint
-(000 swaps the mentalis ends so that its contraction pushes; here a definition may
+(Bibliowicz 2005 swaps the mentalis ends so that its contraction pushes; here a definition may
 simply use a negative shortening).
 
-The joints of a transferred rig are in ``rig.extra['muscles']`` (origin and
+The joints of a transferred rig come with it (:func:`rig_inputs.rig_inputs`: origin and
 insertion in the head's input frame; ``width_canonical`` in head sizes).
 """
 from __future__ import annotations
@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AutobonesError
+from .rig_inputs import rig_inputs
 
 
 @dataclass
@@ -35,7 +36,7 @@ class MuscleJoints:
     origins, insertions : (k, 3) float
         Joint ends.
     widths : (k,) float
-        Influence radius across the muscle line (seed 001's width), same units.
+        Influence radius across the muscle line (the width of Lee, Terzopoulos & Waters 1995), same units.
     """
 
     names: list
@@ -104,10 +105,10 @@ class MuscleJoints:
 def muscles_from_rig(rig):
     """The :class:`MuscleJoints` of a transferred rig, in its input frame and units.
 
-    Reads ``rig.extra['muscles']`` (each with ``name``, ``type``, ``side``, ``origin``,
-    ``insertion`` and ``width_canonical`` in head sizes, or ``width`` in mesh units).
+    Reads the rig's muscles (:func:`rig_inputs.rig_inputs`; each with ``name``, ``type``, ``side``,
+    ``origin``, ``insertion`` and ``width_canonical`` in head sizes, or ``width`` in mesh units).
     """
-    muscles = (getattr(rig, "extra", None) or {}).get("muscles") or getattr(rig, "muscles", None)
+    muscles = rig_inputs(rig).muscles
     if not muscles:
         raise AutobonesError("this rig has no muscles: expressions need a rig made by "
                              "autobones.transfer (or its saved glb with the .rig.json sidecar)")
@@ -129,3 +130,14 @@ def muscles_from_rig(rig):
     if (np.linalg.norm(I - O, axis=1) <= 0).any():
         raise AutobonesError("a muscle of the rig has its origin on its insertion (zero length)")
     return MuscleJoints(names, types, sides, O, I, np.array(W))
+
+
+def influence_fields(fields, names, n):
+    """(k, n) float: the rig's influence field ``muscle/<name>`` of each muscle in ``names``
+    (``fields`` a dict of (n,) arrays; 0 where a muscle has none)."""
+    infl = np.zeros((len(names), n))
+    for i, nm in enumerate(names):
+        f = fields.get(f"muscle/{nm}")
+        if f is not None:
+            infl[i] = np.asarray(f, dtype=np.float64).reshape(n)
+    return infl

@@ -1,4 +1,4 @@
-"""Rotations: about the canonical axes, between two directions, and the 24 axis turns."""
+"""Rotations: about the axes, from Euler angles, between two directions, the +X turn of points, the 24 axis turns."""
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -33,3 +33,39 @@ def axis_turn(A):
         k = int(np.argmin(np.abs(R[rows, cols])))
         T[rows[k], cols[k]] *= -1.0
     return T
+
+
+def axis_rotation(axis, deg):
+    """(3, 3) right-handed rotation about the frame's axis ``axis`` (0, 1, 2: X, Y, Z) by ``deg``
+    degrees, applied to column vectors (``R @ x``)."""
+    a = np.radians(float(deg))
+    c, s = np.cos(a), np.sin(a)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R = np.eye(3)
+    R[i, i], R[i, j], R[j, i], R[j, j] = c, -s, s, c
+    return R
+
+
+def euler_rotation(deg):
+    """(3, 3) rotation ``Rz @ Ry @ Rx`` from (pitch, yaw, roll) degrees about +X, +Y, +Z (missing
+    trailing angles are 0), applied to column vectors."""
+    p, y, r = (list(np.ravel(deg).astype(float)) + [0.0, 0.0, 0.0])[:3]
+    return axis_rotation(2, r) @ axis_rotation(1, y) @ axis_rotation(0, p)
+
+
+def align_rotation(a, b):
+    """(3, 3) smallest rotation taking unit vector ``a`` (3,) to unit vector ``b`` (3,), applied to
+    column vectors; opposite vectors give the half turn about +Y."""
+    v, c = np.cross(a, b), float(a @ b)
+    if c < -0.999999:
+        return axis_rotation(1, 180.0)
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def x_turn(P, angle):
+    """Displacement (m, 3) of points ``P`` (m, 3), given relative to a pivot, turned by ``angle``
+    (radians, scalar or (m,)) about the +X axis (in the canonical frame: the lid and jaw joints'
+    axis, the subject's left)."""
+    ca, sa = np.cos(angle), np.sin(angle)
+    return np.c_[np.zeros(len(P)), (ca - 1.0) * P[:, 1] - sa * P[:, 2], sa * P[:, 1] + (ca - 1.0) * P[:, 2]]

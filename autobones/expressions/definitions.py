@@ -1,0 +1,141 @@
+"""The expression definitions: reading the data file, its model parameters, action-unit keys.
+
+``generic_rig/expressions.json`` (format ``autobones-expressions/1``) holds the skin/muscle
+model's parameters (section ``model``, lengths in face units: fu = the head's exocanthion
+distance), the muscle types, the FACS action units and the emotion prototypes (Erdoğdu 2010,
+Table 3-3). :func:`model_parameters` is the one place the ``model`` section is resolved: every
+optional key has its fallback in :data:`MODEL_DEFAULTS`, every required key is checked there.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import os
+
+from ..errors import AutobonesError
+
+# The fallbacks used when a definitions file lacks an optional ``model`` key: the values the
+# model used before the key existed, so an older user file poses as it did. The shipped
+# expressions.json sets most of them explicitly (several to other values: slide_thickness
+# 0.08, under_chin_depth 0.8, cheek_spread 0.25, jaw_glide [0.003, 0.002], eyelids.lateral_reach
+# 1.6, eyelids.corner_release 1.0, eyelids.smoothing 0.02).
+MODEL_DEFAULTS = {
+    "skull_smoothing_passes": 10,       # neighbour-sum passes smoothing the skull directions
+    "smoothing": 0.012,                 # fu: heat diffusion of the muscle fields
+    "normalise_overlaps": False,        # overlapping wire dropoffs normalised to sum <= 1
+    "slide_thickness": 0.04,            # fu: muscles of type "slide" slide over bone this close
+    "jaw_spread": 0.15,                 # fu: jaw weight diffused below the mouth line
+    "cheek_spread": 0.0,                # fu: jaw weight diffused up into the cheeks
+    "under_chin_height": 0.15,          # fu above the menton
+    "under_chin_depth": 0.6,            # fu behind the menton
+    "jaw_glide": [0.0, 0.0],            # fu per degree: (down, forward)
+    "unfold_reach": 0.25,               # fu from the first folds
+    "lips": {"normal_bias": 0.03},      # fu: the mouth line follows the lip surfaces' normals
+    "skull": {"blend": 0.1},            # fu: region thicknesses blend over this much skin
+    "eyelids": {
+        "depth": 0.02,                  # fu behind the eye pivot
+        "lateral_reach": 1.0,           # half fissure widths past the outer corner
+        "corner_exponent": 1.0,
+        "corner_release": 0.0,          # fissure heights
+        "smoothing": None,              # fu; None: the muscle fields' ``smoothing``
+        "margin_hold": 0.85,            # share of the muscles' pull the lid margins ignore
+        "attached_part_size": 0.5,      # fu: lashes and eye shells up to this size
+    },
+    "mouth_parts": {"reach": 0.9, "band": 0.03, "rigid_size": 0.5, "pharynx": 0.1},   # fu
+}
+
+# keys every definitions file must set (no fallback), by section ("" = the model section itself)
+MODEL_REQUIRED = {
+    "": ("rest_weight", "cross_talk", "cvs", "lips", "skull", "creases", "eyelids"),
+    "lips": ("zone_half_width", "zone_height", "cut_width"),
+    "skull": ("default",),
+    "creases": ("forehead_amplitude", "forehead_wavelength", "glabella_amplitude", "glabella_wavelength"),
+    "eyelids": ("lower_range", "upper_height", "lower_height", "width_margin"),
+}
+
+# fallbacks of the optional keys of a muscle type (``shortening`` 0: the type does not move)
+MUSCLE_TYPE_DEFAULTS = {"shortening": 0.0, "slide": False, "galea": None}
+
+
+def load_expressions(path=None):
+    """The expression definitions (default ``generic_rig/expressions.json``) as a dict.
+
+    ``path`` may also be a dict (returned as it is). Raises AutobonesError when the file cannot
+    be read or lacks one of the sections ``model``, ``muscle_types``, ``action_units``,
+    ``expressions``.
+    """
+    if path is None:
+        from ..generic_rig import expressions_path
+
+        path = expressions_path()
+    if isinstance(path, dict):
+        return path
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+        for key in ("model", "muscle_types", "action_units", "expressions"):
+            doc[key]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise AutobonesError(f"{path}: cannot read the expression definitions ({exc})") from None
+    return doc
+
+
+def model_parameters(doc):
+    """The definitions' ``model`` section over :data:`MODEL_DEFAULTS`, checked.
+
+    Parameters
+    ----------
+    doc : dict
+        Expression definitions (:func:`load_expressions`).
+
+    Returns
+    -------
+    dict
+        A new dict: every key of :data:`MODEL_DEFAULTS` (nested sections merged key by key) and
+        every key of the file; ``eyelids.smoothing`` None resolved to ``smoothing``. Lengths in
+        face units, as in the file.
+
+    Raises AutobonesError naming the first required key (:data:`MODEL_REQUIRED`) the file lacks.
+    """
+    model = doc.get("model")
+    if not isinstance(model, dict):
+        raise AutobonesError("expression definitions: the 'model' section is missing or not an object")
+    out = copy.deepcopy(MODEL_DEFAULTS)
+    for key, value in model.items():
+        if isinstance(out.get(key), dict) and isinstance(value, dict):
+            out[key].update(value)
+        else:
+            out[key] = value
+    for section, keys in MODEL_REQUIRED.items():
+        where = out if not section else model.get(section)
+        for key in keys:
+            if not isinstance(where, dict) or key not in where:
+                name = f"model.{section}.{key}" if section else f"model.{key}"
+                raise AutobonesError(f"expression definitions: {name} is missing (see generic_rig/expressions.json)")
+    if out["eyelids"]["smoothing"] is None:
+        out["eyelids"]["smoothing"] = out["smoothing"]
+    return out
+
+
+def muscle_types(doc):
+    """Muscle type name -> its definition over :data:`MUSCLE_TYPE_DEFAULTS` (new dicts).
+
+    ``wire`` (fractions origin -> insertion where the wire runs) and ``dropoff`` (muscle widths)
+    have no fallback: a type a rig's muscle uses must set them.
+    """
+    return {name: {**MUSCLE_TYPE_DEFAULTS, **spec} for name, spec in doc["muscle_types"].items()}
+
+
+def parse_au_key(key):
+    """An action-unit key as given by a user -> (key, base, side).
+
+    ``12``, ``"12"``, ``"AU12"``, ``" au12l "`` -> ``("12", "12", None)`` ... ``("12L", "12", "l")``:
+    the normalised key (stripped, upper case, without the ``AU`` prefix), the AU number and the
+    side (``"l"`` / ``"r"``: the subject's left / right half, or None for both). Whether the AU
+    exists is for the caller to check.
+    """
+    key = str(key).strip().upper().removeprefix("AU")
+    if key[-1:] in ("L", "R"):
+        return key, key[:-1], key[-1].lower()
+    return key, key, None
