@@ -1,0 +1,130 @@
+"""autobones.geometry: the shared layer, one operation at a time, on tiny meshes and a real head."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from autobones.errors import AutobonesError
+from autobones.geometry import laplacian as lap
+from autobones.geometry.areas import triangle_areas, vertex_areas
+from autobones.geometry.normals import triangle_normals, vertex_normals
+from autobones.geometry.rotations import rotate_between
+from autobones.geometry.smooth import ramp, smoothstep, step
+from autobones.geometry.topology import boundary_vertices, mesh_edges, mesh_parts, weld
+from autobones.geometry.validate import mesh_arrays
+from autobones.io.mesh import load_mesh
+from shared_data import data, icosphere
+
+
+@pytest.fixture(scope="module")
+def ict():
+    return load_mesh(data("ict/generic_neutral_mesh.obj"))
+
+
+def test_normals_point_out_of_a_sphere_and_faces_have_twice_their_area():
+    V, F = icosphere(3)
+    N = vertex_normals(V, F)
+    assert np.allclose(np.linalg.norm(N, axis=1), 1.0)
+    assert (np.einsum("ij,ij->i", N, V) > 0.99).all()
+    assert np.allclose(np.linalg.norm(triangle_normals(V, F), axis=1), 2.0 * triangle_areas(V, F))
+
+
+def test_normals_of_unused_and_degenerate_vertices_are_zero():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5], [2, 0, 0]], float)
+    F = np.array([[0, 1, 2], [0, 1, 4]])          # the second is degenerate (collinear)
+    N = vertex_normals(V, F)
+    assert np.allclose(N[:3], [0, 0, 1]) and not N[3].any() and not N[4].any()
+
+
+def test_vertex_areas_sum_to_the_surface_area(ict):
+    V, F = ict
+    A = vertex_areas(V, F)
+    assert A.shape == (len(V),) and (A >= 0).all()
+    assert np.isclose(A.sum(), triangle_areas(V, F).sum(), rtol=1e-12)
+
+
+def test_parts_edges_and_boundary_of_two_open_triangles_and_a_sphere():
+    V, F = icosphere(1)
+    assert len(mesh_edges(F)) == 3 * len(F) // 2                       # closed: each edge in two faces
+    assert not boundary_vertices(len(V), F).any()
+    F2 = np.array([[0, 1, 2], [3, 4, 5]])
+    assert list(mesh_parts(7, F2)) == [0, 0, 0, 1, 1, 1, 2]             # vertex 6 alone: its own part
+    assert boundary_vertices(6, F2).all()
+
+
+def test_weld_merges_copies_and_drops_collapsed_faces():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1e-9, 0, 0], [1, 1e-9, 0], [0, 0, 1]], float)
+    F = np.array([[0, 1, 2], [3, 4, 5], [0, 3, 1]])                     # the last collapses
+    Vw, Fw, index = weld(V, F, 1e-6)
+    assert len(Vw) == 4 and len(Fw) == 2 and index[0] == index[3] and index[1] == index[4]
+
+
+def test_ict_has_many_parts_and_the_skin_is_the_largest(ict):
+    V, F = ict
+    parts = mesh_parts(len(V), F)
+    sizes = np.bincount(parts)
+    assert len(sizes) > 10 and sizes.max() > 0.5 * len(V)
+
+
+def test_factor_spd_solves_and_agrees_with_colamd(ict):
+    V, F = ict
+    L, M = lap.laplacian(V, F)
+    A = (M + 1e-2 * L).tocsc()
+    b = np.random.default_rng(0).standard_normal((len(V), 3))
+    x = lap.factor_spd(A, use_cholmod=False)(b)
+    assert np.abs(A @ x - b).max() < 1e-9 * np.abs(b).max()
+    x_colamd = sp.linalg.splu(A, permc_spec="COLAMD").solve(b)
+    assert np.abs(x - x_colamd).max() < 1e-10 * np.abs(x).max()
+    assert lap.factor_spd(A, use_cholmod=False)(b[:, 0]).shape == (len(V),)
+
+
+def test_factor_spd_uses_cholmod_when_it_is_installed(ict):
+    pytest.importorskip("sksparse.cholmod", reason="the [cholmod] extra (scikit-sparse) is not installed")
+    V, F = ict
+    L, M = lap.laplacian(V, F)
+    A = (M + 1e-2 * L).tocsc()
+    b = np.random.default_rng(1).standard_normal(len(V))
+    x, x_lu = lap.factor_spd(A)(b), lap.factor_spd(A, use_cholmod=False)(b)
+    assert np.abs(x - x_lu).max() < 1e-10 * np.abs(x).max()
+
+
+def test_diffusion_keeps_the_mass_weighted_total_and_smooths(ict):
+    V, F = ict
+    L, M = lap.laplacian(V, F)
+    u = (V[:, 1] > np.median(V[:, 1])).astype(float)
+    v = lap.diffuse(u, L, M, t=(0.02 * np.ptp(V[:, 1])) ** 2)
+    assert np.isclose((M @ v).sum(), (M @ u).sum(), rtol=1e-8)        # heat is conserved
+    assert v.min() > -1e-9 and v.max() < 1 + 1e-9                        # maximum principle
+    E = mesh_edges(F)
+    assert np.abs(v[E[:, 0]] - v[E[:, 1]]).sum() < np.abs(u[E[:, 0]] - u[E[:, 1]]).sum()
+
+
+def test_smooth_steps_are_monotone_c1_and_hit_their_ends():
+    t = np.linspace(-0.5, 1.5, 2001)
+    s = smoothstep(t)
+    assert s[0] == 0 and s[-1] == 1 and (np.diff(s) >= 0).all()
+    assert np.abs(np.diff(s, 2)).max() < 1e-5                             # no kink
+    assert ramp(2.0, 2.0, 4.0) == 0 and ramp(4.0, 2.0, 4.0) == 1 and ramp(3.0, 4.0, 2.0) == 0.5
+    assert step(0.0, 0.0, 2.0) == 0.5 and step(-1.0, 0.0, 2.0) == 0 and step(1.0, 0.0, 2.0) == 1
+
+
+def test_rotate_between_takes_a_to_b_and_keeps_lengths():
+    rng = np.random.default_rng(2)
+    a = rng.standard_normal((50, 3)); a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = rng.standard_normal((50, 3)); b /= np.linalg.norm(b, axis=1, keepdims=True)
+    v = rng.standard_normal((50, 3))
+    assert np.allclose(rotate_between(a, b, a), b)
+    assert np.allclose(np.linalg.norm(rotate_between(a, b, v), axis=1), np.linalg.norm(v, axis=1))
+
+
+@pytest.mark.parametrize("V, F, words", [
+    (np.zeros((3, 2)), [[0, 1, 2]], "shape"),
+    (np.zeros((3, 3)), [[0, 1, 3]], "out of range"),
+    (np.full((3, 3), np.nan), [[0, 1, 2]], "NaN"),
+    (np.zeros((3, 3)), [[0, 1.5, 2]], "integer"),
+    (np.zeros((3, 3)), np.zeros((0, 3), int), "shape"),
+])
+def test_mesh_arrays_refuse_bad_arrays_with_one_message(V, F, words):
+    with pytest.raises(AutobonesError, match=words):
+        mesh_arrays(V, F, "head")
+    if words == "shape" and len(np.asarray(F)) == 0:
+        assert mesh_arrays(V, F, allow_no_faces=True)[1].shape == (0, 3)
