@@ -8,7 +8,7 @@ Public API::
     rig = autobones.load_rig("head.glb")    # a saved transferred rig, posed:
     V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
 """
-__version__ = "0.1.0"
+from .version import __version__
 
 import importlib.util as _util
 import os as _os
@@ -26,18 +26,18 @@ from .rig import Rig
 from .skeleton import Skeleton
 from .rig_transfer.pipeline import transfer
 from .rig_transfer.fields import transfer_attributes
-from .rig_transfer.labelled_rig import LabelledRig
+from .labelled_rig import LabelledRig
 from .landmarks.detect import detect_landmarks
 from .expressions.model import ExpressionModel
 from .io.rig_files import load_rig
 
 
 def build_rig(base, landmarks, **kwargs):
-    """A labelled generic rig from a base head (path or (V, F)) and its landmarks (path or dict);
-    see :func:`autobones.build_rig.build_rig`."""
-    from .rig_transfer.build import build_rig as _build
+    """A labelled generic rig from a base head (path, (V, F) or mesh object) and its landmarks (path or dict);
+    see :func:`autobones.rig_transfer.build.build_rig`."""
+    from .rig_building.build import build_rig as _build
     from .io.landmarks import resolve_landmarks
-    from .placement.pipeline import resolve_mesh
+    from .io.mesh import resolve_mesh
 
     V, F, _ = resolve_mesh(base)
     lm, _ = resolve_landmarks(landmarks)

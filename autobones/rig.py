@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Optional
 
 import numpy as np
 
@@ -22,6 +24,30 @@ def sidecar_paths(glb_path):
     if base.endswith(".rig"):
         base = base[:-4]
     return base + ".rig.json", base + ".weights.npz"
+
+
+# Sidecar keys beyond the Rig's own (bones, labels, frame...), in the order they are written:
+# one order for every pipeline, so the JSON text does not depend on which one filled them
+# (keys of ``Rig.other`` go just before ``expressions``, which ``save`` writes last).
+SIDECAR_KEYS = ("source", "muscles", "landmarks", "landmark_confidence", "landmarks_dropped", "landmarks_flagged",
+                "field_labels", "reliable_fraction", "facial_bone_partner", "neck_height_canonical", "batch",
+                "expressions")
+
+
+def sidecar_attributes(doc):
+    """Sidecar keys beyond the Rig's own -> keyword arguments of :class:`Rig`.
+
+    ``doc`` is a dict holding some of :data:`SIDECAR_KEYS` (JSON values: lists, dicts,
+    numbers); ``landmarks`` become (3,) float64 arrays, anything else is kept as given and
+    keys the Rig does not know go to ``other`` (a newer version's sidecar survives a round trip).
+    """
+    kwargs = {k: doc[k] for k in SIDECAR_KEYS if k in doc}
+    if kwargs.get("landmarks") is not None:
+        kwargs["landmarks"] = {n: np.asarray(v, dtype=np.float64) for n, v in kwargs["landmarks"].items()}
+    other = {k: v for k, v in doc.items() if k not in SIDECAR_KEYS}
+    if other:
+        kwargs["other"] = other
+    return kwargs
 
 
 @dataclass
@@ -50,10 +76,41 @@ class Rig:
         Seconds per pipeline stage.
     segmentation : segment.HeadSegmentation or None
         The depth grouping with its full merge tree: ``rig.segmentation.groups(4)``
-        cuts it at another group count (seed 003 §3.1).
+        cuts it at another group count (the bone-placement method of ``place``: average-linkage
+        grouping, k-means facial bones).
     fields : dict of str -> (n,) or (n, k) array
         Attribute fields carried onto the vertices (``transfer``); saved in the npz
         as ``field/<name>``.
+    source : str or None
+        Base name of the input file (None for arrays); written to the sidecar always.
+
+    The attributes below are None when the pipeline that made the rig has none (then the
+    sidecar has no such key); each is saved under its own name in the sidecar.
+
+    muscles : list of dict or None
+        ``transfer``: each with ``name``, ``type``, ``side``, ``origin`` and ``insertion``
+        (3-lists, input frame and units), ``width`` (mesh units), ``width_canonical``
+        (head sizes) and the definition's other keys (JSON values).
+    landmarks : dict str -> (3,) float64 or None
+        ``transfer``: the head's validated landmarks, input frame and units.
+    landmark_confidence : dict str -> float or None
+        Automatic landmarks: confidence in [0, 1] per name.
+    landmarks_dropped, landmarks_flagged : list of str or None
+        Automatic landmarks: names dropped as unreliable; names the refinement flagged.
+    field_labels : dict str -> list of str or None
+        Class names of the integer fields: ``fields[name] == i`` means ``field_labels[name][i]``.
+    reliable_fraction : float or None
+        ``transfer``: fraction of the head's vertices that copied their fields (the rest were inpainted).
+    facial_bone_partner : list of int or None
+        ``place``: index of each facial bone's mirror partner (-1: on the midline).
+    neck_height_canonical : float or None
+        ``place`` without landmarks: height of the neck cut in the canonical frame (head sizes).
+    batch : dict or None
+        ``autobones batch``: ``{"options": ..., "options_hash": ...}``.
+    expressions : dict or None
+        A loaded rig's expression record (:meth:`expression_record`; ``definitions`` inside).
+    other : dict
+        Sidecar keys of a loaded rig that this version does not know, written back unchanged.
     """
 
     vertices: np.ndarray
@@ -65,13 +122,45 @@ class Rig:
     frame: object
     options: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
-    extra: dict = field(default_factory=dict)
     segmentation: object = None
     fields: dict = field(default_factory=dict)
+    source: Optional[str] = None
+    muscles: Optional[list] = None
+    landmarks: Optional[dict] = None
+    landmark_confidence: Optional[dict] = None
+    landmarks_dropped: Optional[list] = None
+    landmarks_flagged: Optional[list] = None
+    field_labels: Optional[dict] = None
+    reliable_fraction: Optional[float] = None
+    facial_bone_partner: Optional[list] = None
+    neck_height_canonical: Optional[float] = None
+    batch: Optional[dict] = None
+    expressions: Optional[dict] = None
+    other: dict = field(default_factory=dict)
+
+    def sidecar_extra(self):
+        """The sidecar's keys beyond the Rig's own, as JSON values (:data:`SIDECAR_KEYS` order)."""
+        out = {"source": self.source}
+        for key in SIDECAR_KEYS[1:-1]:
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = value
+        if self.landmarks is not None:
+            out["landmarks"] = {n: np.asarray(v).tolist() for n, v in self.landmarks.items()}
+        out.update(self.other)
+        if self.expressions is not None:  # last, where ``save`` puts a new record
+            out["expressions"] = self.expressions
+        return out
+
+    @property
+    def extra(self):
+        """Read-only view of :meth:`sidecar_extra` (older code read ``rig.extra['muscles']``;
+        use the attributes: ``rig.muscles``, ``rig.landmarks``, ``rig.field_labels``...)."""
+        return MappingProxyType(self.sidecar_extra())
 
     def sidecar(self):
         """The JSON sidecar as a dict."""
-        from . import __version__
+        from .version import __version__
 
         return {
             "format": "autobones-rig/1",
@@ -87,13 +176,13 @@ class Rig:
                 # the last merges of the depth tree: a large jump before a count says that
                 # many groups are natural for this head
                 "depth_merge_distances": self.segmentation.linkage[-8:, 2][::-1].tolist()}),
-            **self.extra,
+            **self.sidecar_extra(),
         }
 
     def muscle_markers(self):
         """glTF marker nodes for the muscles: origins ride the skull (``head``), insertions the
         bone that dominates the skin where they attach."""
-        muscles = self.extra.get("muscles", [])
+        muscles = self.muscles or []
         if not muscles:
             return []
         from scipy.spatial import cKDTree
@@ -112,7 +201,7 @@ class Rig:
         """The :class:`autobones.expressions.ExpressionModel` of this rig (built on first use and
         kept; needs the muscles of ``transfer``). ``definitions`` (path or dict) builds it again with
         those; ``pose`` and ``save`` then use it. None: the model already built, else one with the
-        definitions a loaded rig's sidecar kept (``extra['expressions']['definitions']``), else
+        definitions a loaded rig's sidecar kept (``expressions['definitions']``), else
         ``generic_rig/expressions.json``."""
         from .expressions.model import ExpressionModel
 
@@ -120,7 +209,7 @@ class Rig:
         if definitions is None:
             if cached is not None:
                 return cached
-            definitions = (self.extra.get("expressions") or {}).get("definitions")
+            definitions = (self.expressions or {}).get("definitions")
         if cached is None or cached.definitions is not definitions:
             cached = ExpressionModel(definitions).fit(self)
             self.__dict__["_expression_model"] = cached
@@ -141,14 +230,14 @@ class Rig:
         the model poses with (``format``, their ``sha256``, the whole ``definitions``) and the morph
         targets written to the glb (``name``, ``au``, the AU's ``label``, ``max_displacement`` in
         mesh units) and those ``skipped`` as all zero on this head."""
-        if not self.extra.get("muscles"):
+        if not self.muscles:
             return None
         from .expressions.model import load_expressions
         from .expressions.morph_targets import definitions_digest
 
         model = self.__dict__.get("_expression_model")
         doc = model.doc_ if model is not None else load_expressions(
-            (self.extra.get("expressions") or {}).get("definitions"))
+            (self.expressions or {}).get("definitions"))
         aus = doc.get("action_units", {})
         return {"format": doc.get("format"), "sha256": definitions_digest(doc),
                 "morph_targets": [{"name": name, "au": name[2:], "label": aus.get(name[2:].rstrip("LR"), {}).get("name"),
@@ -217,3 +306,15 @@ class Rig:
                 if os.path.exists(tmp):
                     os.remove(tmp)
         return targets
+
+
+_dataclass_init = Rig.__init__
+
+
+def _init(self, *args, extra=None, **kwargs):
+    # ``extra=`` (a sidecar-style dict, as older code passed) fills the typed attributes
+    _dataclass_init(self, *args, **{**(sidecar_attributes(extra) if extra else {}), **kwargs})
+
+
+_init.__doc__ = _dataclass_init.__doc__
+Rig.__init__ = _init

@@ -341,7 +341,7 @@ def copy_through(P_src, P_dst, gF, V_src, F_src, D_src, V_dst):
     target; it takes the source displacement at its point (barycentric on the source triangle),
     and each target vertex takes the displacement at its closest point on the generic mesh laid
     on the target (P_dst, gF). Returns (n_dst, 3)."""
-    from autobones.rig_transfer.pipeline import ride
+    from autobones.rig_transfer.under_skin import ride
 
     return ride(V_dst, P_dst, gF, ride(P_src, V_src, F_src, D_src))
 
@@ -371,7 +371,7 @@ def rotation_ceiling(model, X, pivot, degrees, glide=None):
 def region_masks(rig, skin):
     """Named boolean masks: "all", "skin", "parts" (everything not skin: eyeballs, eyelashes,
     eye-occlusion shells, teeth, tongue...) and the skin's regions (transferred ``region``)."""
-    labels = list(rig.extra["field_labels"]["region"])
+    labels = list(rig.field_labels["region"])
     reg = np.asarray(rig.fields["region"]).astype(int)
     out = {"all": np.ones(len(skin), bool), "skin": skin, "parts": ~skin}
     for name, members in REGIONS:
@@ -513,7 +513,7 @@ def main():
     ref = rigs["dense + landmarks"]
     parts = mesh_parts(len(V), F)
     skin = parts == np.argmax(np.bincount(parts))
-    up_lip, lo_lip = lips(V, lm, ref.fields["region"], ref.extra["field_labels"]["region"], skin)
+    up_lip, lo_lip = lips(V, lm, ref.fields["region"], ref.field_labels["region"], skin)
 
     # weight sets per rig; "global affine" is one bone with weight 1
     entries = [("global affine", 1, {"all": np.ones((len(V), 1))}, ["root"])]

@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 import autobones
-from autobones.rig_transfer.pipeline import load_generic, ride
+from autobones.rig_transfer.pipeline import load_generic
+from autobones.rig_transfer.under_skin import ride
 
 ROOT = Path(__file__).resolve().parents[1]
 ICT = ROOT.parent / "shared" / "data" / "ict"

@@ -12,7 +12,7 @@ Data: ``../shared/data``: ICT ``generic_neutral_mesh`` and ``identity000..002``
 scan), each with the 27 iBUG-derived contract landmarks the source published
 (``NAME.landmarks.json``). Goat, koala and robot (``misc/``) have no human face.
 
-Method: :class:`autobones.detect.LandmarkDetector` on the mesh as loaded, its
+Method: :class:`autobones.landmarks.detect.LandmarkDetector` on the mesh as loaded, its
 frame from :func:`autobones.orient.detect_frame` (found once per head and shared by
 every configuration). Configurations measured in the same run:
 
@@ -156,7 +156,7 @@ class Clock:
 
 @contextlib.contextmanager
 def timed_stages(clock):
-    """Wrap the rendering functions and ``refine`` that :mod:`autobones.detect` looks up at call time."""
+    """Wrap the rendering functions and ``refine`` that :mod:`autobones.landmarks.detect` looks up at call time."""
     saved = {k: getattr(detect_mod, k) for k in ("rasterize", "shade", "surface_points", "refine")}
     try:
         for k in ("rasterize", "shade", "surface_points"):
@@ -238,7 +238,7 @@ def rig_on(V, F, lm):
     """As benchmarks/transfer.py: a sparse placed rig with a smooth field and 12 regions."""
     from sklearn.cluster import KMeans
 
-    from autobones.rig_transfer.labelled_rig import LabelledRig
+    from autobones.labelled_rig import LabelledRig
 
     placed = autobones.place((V, F), density="sparse")
     fields = {"scalar": np.sin(V[:, 1] / 8) + 0.5 * np.cos(V[:, 0] / 6) + V[:, 2] / 20,
@@ -264,13 +264,9 @@ def main(argv=None):
     wall0 = time.perf_counter()
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
-    # name the code measured: the commit, and whether the detect.py imported is that commit's
-    head_src = subprocess.run(["git", "-C", str(ROOT), "show", "HEAD:autobones/detect.py"], capture_output=True).stdout
-    mine = Path(detect_mod.__file__).read_bytes()
-    if mine != head_src:
-        import hashlib
-
-        commit += f" + detect.py differing from it (sha1 {hashlib.sha1(mine).hexdigest()[:8]})"
+    # name the code measured: the commit, and whether the package imported differs from it
+    if subprocess.run(["git", "-C", str(ROOT), "diff", "--quiet", "HEAD", "--", "autobones"]).returncode:
+        commit += " + uncommitted changes under autobones/"
     if not Path(detect_mod.__file__).resolve().is_relative_to(ROOT):
         commit += f" (autobones imported from {Path(autobones.__file__).parent})"
     print(f"# autobones {commit}, mediapipe {version('mediapipe')}, dlib {version('dlib-bin') or version('dlib')}; "

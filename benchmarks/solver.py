@@ -130,7 +130,7 @@ def main(argv=None):
         rows.append((label, n, "transfer: whole call", t_old, t_new, diff))
         print(f"  {label}: transfer done", file=sys.stderr, flush=True)
 
-    print(f"\n| mesh | vertices | what | old (COLAMD) s | new (symmetric MMD) s | old / new | max difference |")
+    print("\n| mesh | vertices | what | old (COLAMD) s | new (symmetric MMD) s | old / new | max difference |")
     print("|---|---|---|---|---|---|---|")
     for label, n, what, a, b, d in rows:
         print(f"| {label} | {n:,} | {what} | {a:.2f} | {b:.2f} | {a / b:.2f}x | {d:.1e} |")

@@ -7,7 +7,7 @@ Run by hand, not by the tests::
 
 Every head is rigged by ``autobones.transfer`` with its landmark file and
 ``ExpressionModel`` is fitted on it. The mirror plane is the landmarks' own
-(``autobones.detect.symmetry_plane``: normal the median unit ``x_l - x_r``, through
+(``autobones.landmarks.refine.symmetry_plane``: normal the median unit ``x_l - x_r``, through
 the median of the pair midpoints and midline names), so nothing assumes the file's axes. All lengths are in percent
 of the head's exocanthion distance (ex-ex). Columns:
 
@@ -111,14 +111,14 @@ def measure(name, mesh, marks):
     rig = autobones.transfer(mesh, marks, details=details)
     model = ExpressionModel().fit(rig)
     seconds = time.perf_counter() - t0
-    lm = {k: np.asarray(v) for k, v in rig.extra["landmarks"].items()}
+    lm = {k: np.asarray(v) for k, v in rig.landmarks.items()}
     plane = symmetry_plane(lm)
     unit = 0.01 * float(np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]))   # 1 % of ex-ex
     generic = load_generic()
     P = details["correspondence"]
     m = mirror_partners(generic.vertices, symmetry_plane(generic.landmarks))
     corr = np.linalg.norm(reflect(P, *plane) - P[m], axis=1) / unit
-    mus = {x["name"]: x for x in rig.extra["muscles"]}
+    mus = {x["name"]: x for x in rig.muscles}
     origins = pair_mismatch({k: x["origin"] for k, x in mus.items()}, plane) / unit
     insertions = pair_mismatch({k: x["insertion"] for k, x in mus.items()}, plane) / unit
     V, skin = rig.vertices, model.skin_
@@ -129,7 +129,7 @@ def measure(name, mesh, marks):
     au12 = model.pose(au={12: 1.0}) - V
     side = V @ plane[0] - plane[1]
     size = np.linalg.norm(happy, axis=1) * skin
-    floor = symmetric_bumps(V, rig.extra["muscles"], plane, 15.0 * unit)
+    floor = symmetric_bumps(V, rig.muscles, plane, 15.0 * unit)
     lmm = pair_mismatch(lm, plane) / unit
     return {"head": name, "s": seconds, "lm": (lmm.mean(), lmm.max()), "corr": (corr.mean(), np.percentile(corr, 95)),
             "origins": (origins.mean(), origins.max()), "insertions": (insertions.mean(), insertions.max()),

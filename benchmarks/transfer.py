@@ -34,7 +34,7 @@ import numpy as np
 import autobones
 from autobones.geometry.topology import mesh_parts
 from autobones.io.mesh import load_mesh
-from autobones.rig_transfer.labelled_rig import LabelledRig
+from autobones.labelled_rig import LabelledRig
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ict"
 HEADS = ["generic_neutral_mesh", "identity000", "identity001", "identity002"]

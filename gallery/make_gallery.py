@@ -91,7 +91,7 @@ def transfer_picture(rig, size=420):
     jaw = rig.weights[:, rig.skeleton.names.index("jaw")]
     skin = np.array([0.85, 0.85, 0.85]) * (1 - jaw[:, None]) + np.array([0.15, 0.75, 0.2]) * jaw[:, None]
     bones = np.stack([rig.frame.to_canonical(rig.skeleton.heads), rig.frame.to_canonical(rig.skeleton.tails)], 1)
-    muscles = np.array([[m["origin"], m["insertion"]] for m in rig.extra["muscles"]]).reshape(-1, 3)
+    muscles = np.array([[m["origin"], m["insertion"]] for m in rig.muscles]).reshape(-1, 3)
     muscles = rig.frame.to_canonical(muscles).reshape(-1, 2, 3)
     top = render.render_views(C, rig.faces, vertex_colors=skin, views=views, size=(size, size),
                               segments=np.concatenate([bones, muscles]), points=bones[:, 0],
@@ -196,7 +196,7 @@ def main(argv=None):
             rig = autobones.transfer(DATA / mesh, marks)
             path = Path(args.out) / f"{name}.png"
             render.save_png(path, transfer_picture(rig))
-            print(f"{path}: {len(rig.options['landmarks_used'])} landmarks, {len(rig.extra['muscles'])} muscles")
+            print(f"{path}: {len(rig.options['landmarks_used'])} landmarks, {len(rig.muscles)} muscles")
             continue
         rel, density = HEADS[name]
         rig = autobones.place(None if rel is None else DATA / rel, density=density)

@@ -20,7 +20,7 @@ ROOT = os.path.dirname(HERE)
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
-from autobones.rig_transfer.build import REGIONS, build_rig  # noqa: E402
+from autobones.rig_building.build import REGIONS, build_rig  # noqa: E402
 from autobones.io.landmarks import read_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
 

@@ -10,9 +10,10 @@ ROOT = Path(__file__).resolve().parents[1]
 # source folder -> installed package name (pyproject's package-dir)
 SOURCES = {"autobones": ROOT / "autobones", "autobones.cli": ROOT / "cli",
            "autobones.generic_rig": ROOT / "generic_rig"}
-PIPELINES = ("placement", "rig_transfer", "landmarks", "expressions")
-# the only pipeline-to-pipeline imports: placing on a transferred rig, finding landmarks for a transfer
-ALLOWED_BETWEEN = {("placement", "rig_transfer"), ("rig_transfer", "landmarks")}
+PIPELINES = ("placement", "rig_transfer", "rig_building", "landmarks", "expressions")
+# the only pipeline-to-pipeline imports: placing on a transferred rig, finding landmarks for a
+# transfer, and labelling a generic rig's depth groups as placing does
+ALLOWED_BETWEEN = {("placement", "rig_transfer"), ("rig_transfer", "landmarks"), ("rig_building", "placement")}
 
 
 def _modules():

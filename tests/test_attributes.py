@@ -72,3 +72,83 @@ def test_field_length_must_match():
     V, F = icosphere(2)
     with pytest.raises(AutobonesError, match="rows"):
         transfer_attributes((V, F), (V, F), {"f": np.zeros(3)}, {}, {})
+
+
+def test_local_frames_recover_a_rigid_motion_and_scale_and_stay_rotations_under_shear():
+    from scipy.spatial.transform import Rotation
+
+    from autobones.rig_transfer.fields import local_frames
+
+    V, F = icosphere(2)
+    R = Rotation.from_rotvec(np.radians(73.0) * np.array([1.0, 2.0, -0.5]) / np.sqrt(5.25)).as_matrix()
+    Rf, scale = local_frames(V, 3.0 * V @ R.T + [1.0, -2.0, 0.5], F, np.arange(len(F)))
+    assert np.abs(Rf - R).max() < 1e-12 and np.abs(scale - 3.0).max() < 1e-12
+    shear = np.array([[1.0, 0.6, 0.0], [0.0, 1.0, 0.0], [0.2, 0.0, 1.3]])
+    Rs, s = local_frames(V, V @ shear.T, F, np.arange(len(F)))
+    assert np.abs(Rs @ Rs.transpose(0, 2, 1) - np.eye(3)).max() < 1e-12
+    assert np.all(np.linalg.det(Rs) > 0) and np.all(s > 0)
+
+
+@pytest.fixture(scope="module")
+def head_on_its_side():
+    """The default head and a displacement field on it (normal bulge plus a swirl about the up
+    axis), and the same head turned 90 degrees about the front axis (lying on its side),
+    scaled 2x and moved."""
+    from autobones.geometry.normals import vertex_normals
+    from autobones.io.landmarks import read_landmarks
+    from autobones.io.mesh import default_head
+    from shared_data import ROOT
+
+    V, F = default_head()
+    lm = read_landmarks(ROOT / "generic_rig" / "default_head.landmarks.json")
+    D = 0.01 * vertex_normals(V, F) + 0.05 * np.cross([0.0, 1.0, 0.0], V - V.mean(axis=0))
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    move = lambda P: 2.0 * np.asarray(P) @ R.T + [0.3, -1.0, 2.0]  # noqa: E731
+    return V, F, lm, D, R, move
+
+
+def test_displacements_turn_and_scale_with_the_head(head_on_its_side):
+    """Same mesh: every copied (not inpainted) vector is 2 R d to 1e-9 of the largest (measured
+    3e-13); copied as plain numbers they point the wrong way."""
+    from autobones.rig_transfer.correspondence import dense_correspondence
+    from autobones.rig_transfer.fields import transfer_fields
+
+    V, F, lm, D, R, move = head_on_its_side
+    Vt, lmt = move(V), {k: move(v) for k, v in lm.items()}
+    want = 2.0 * D @ R.T
+    big = np.linalg.norm(want, axis=1).max()
+    P, _, _, ok = dense_correspondence(V, F, Vt, F, lm, lmt)
+    out, copied = transfer_fields(P, F, {"d": D}, Vt, F, source_reliable=ok, vectors=["d"], V_rest=V)
+    assert copied.mean() > 0.97
+    assert np.linalg.norm(out["d"] - want, axis=1)[copied].max() < 1e-9 * big
+    plain = transfer_attributes((V, F), (Vt, F), {"d": D}, lm, lmt)["d"]
+    assert np.linalg.norm(plain - want, axis=1).max() > 0.5 * big
+    unit = transfer_attributes((V, F), (Vt, F), {"n": D / np.linalg.norm(D, axis=1, keepdims=True)}, lm, lmt,
+                               directions=["n"])["n"]
+    assert np.median(np.abs(np.linalg.norm(unit, axis=1) - 1.0)) < 1e-9  # directions are not scaled
+
+
+def test_displacements_onto_a_decimated_head_on_its_side(head_on_its_side):
+    """Target remeshed to half its vertices: the median error is 2.2 % of the largest vector (plain
+    copy: 70 %), measured against the source field at each target vertex's preimage."""
+    from autobones.geometry.closest import closest_points
+
+    V, F, lm, D, R, move = head_on_its_side
+    Vd, Fd = fast_simplification.simplify(move(V).astype(np.float32), F.astype(np.int32), target_reduction=0.5)
+    Vd, Fd = Vd.astype(np.float64), Fd.astype(np.int64)
+    lmt = {k: move(v) for k, v in lm.items()}
+    pre = (Vd - [0.3, -1.0, 2.0]) @ R / 2.0
+    _, face, bary = closest_points(pre, V, F)[:3]
+    want = 2.0 * np.einsum("ki,kij->kj", bary, D[F[face]]) @ R.T
+    big = np.linalg.norm(want, axis=1).max()
+    got = transfer_attributes((V, F), (Vd, Fd), {"d": D}, lm, lmt, vectors=["d"])["d"]
+    assert np.median(np.linalg.norm(got - want, axis=1)) < 0.05 * big
+
+
+def test_vector_fields_must_be_n_by_3_floats():
+    from autobones.errors import AutobonesError
+
+    V, F = icosphere(1)
+    lm = {f"p{i}": V[i] for i in range(0, len(V), 4)}
+    with pytest.raises(AutobonesError, match="must be \\(n, 3\\) floats"):
+        transfer_attributes((V, F), (V, F), {"d": np.zeros(len(V))}, lm, lm, vectors=["d"])

@@ -7,11 +7,11 @@ import pytest
 
 from shared_data import ROOT, data
 
-from autobones.rig_transfer.build import BONES, REGIONS, build_rig, load_muscle_definitions, required_landmarks
+from autobones.rig_building.build import BONES, REGIONS, build_rig, load_muscle_definitions, required_landmarks
 from autobones.errors import AutobonesError
 from autobones.io.landmarks import MIDLINE, NAMES, read_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.rig_transfer.labelled_rig import LabelledRig
+from autobones.labelled_rig import LabelledRig
 
 GR = ROOT / "generic_rig"
 
@@ -325,7 +325,7 @@ def test_committed_default_rig_is_up_to_date(rig):
 
 
 def test_default_rig_face_belongs_to_head_and_jaw_not_neck():
-    from autobones.rig_transfer.labelled_rig import LabelledRig
+    from autobones.labelled_rig import LabelledRig
     from autobones.generic_rig import default_rig_path
 
     rig = LabelledRig.load(default_rig_path())

@@ -104,3 +104,31 @@ def test_outputs_are_not_owner_only(tmp_path):
         os.umask(old)
     for f in [*written, tmp_path / "head.landmarks.json", tmp_path / "head.png"]:
         assert stat.S_IMODE(os.stat(f).st_mode) == 0o644, f
+
+
+@pytest.mark.parametrize("ext", [".obj", ".glb"])
+def test_posed_mesh_round_trips_in_vertex_order(tmp_path, ext):
+    """``autobones pose``'s writer: vertex i of the file is vertex i given (OBJ to 9 digits, GLB float32)."""
+    from autobones.io.posed import write_posed_mesh
+
+    rng = np.random.default_rng(0)
+    m = trimesh.creation.icosphere(2)
+    order = rng.permutation(len(m.vertices))  # a vertex order no loader would make up
+    V = m.vertices[order] * 37.0 + rng.normal(size=3)
+    F = np.argsort(order)[m.faces]
+    path = write_posed_mesh(tmp_path / f"posed{ext}", V, F, comment="a\ntwo-line comment")
+    W, G = load_mesh(path)
+    np.testing.assert_array_equal(G, F)
+    if ext == ".obj":
+        np.testing.assert_allclose(W, V, rtol=1e-8, atol=0)
+        assert open(path).readline() == "# a two-line comment\n"
+    else:
+        np.testing.assert_array_equal(W, V.astype(np.float32))
+
+
+def test_posed_mesh_refuses_other_formats(tmp_path):
+    from autobones.io.posed import write_posed_mesh
+
+    with pytest.raises(AutobonesError, match=r"\.obj or \.glb"):
+        write_posed_mesh(tmp_path / "x.stl", np.zeros((3, 3)), [[0, 1, 2]])
+    assert not (tmp_path / "x.stl").exists()

@@ -7,7 +7,7 @@ import pytest
 import autobones
 from autobones.errors import AutobonesError
 from autobones.io.mesh import load_mesh
-from autobones.placement.pipeline import default_head
+from autobones.io.mesh import default_head
 from autobones.orient import detect_frame, parse_axis
 
 from shared_data import data

@@ -6,7 +6,7 @@ from scipy.spatial import cKDTree
 
 import autobones
 from autobones.io.mesh import load_mesh
-from autobones.placement.pipeline import default_head
+from autobones.io.mesh import default_head
 
 from shared_data import data
 

@@ -337,7 +337,7 @@ def test_batch_size_does_not_change_the_depth_buffer(sphere, monkeypatch):
     """Rasterising in many small batches covers the same pixels at the same depths as in one."""
     import importlib
 
-    raster = importlib.import_module("autobones.render.rasterize")
+    raster = importlib.import_module("autobones.render.raster")
     V, F = sphere
     cam = orthographic_camera(V, (0.3, 0.2, 1.0), size=(96, 80))
     whole = rasterize(V, F, cam)

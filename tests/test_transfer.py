@@ -84,7 +84,7 @@ def test_ict_eyeballs_follow_the_eye_bones(transferred):
         # the eye bone turns the eyeball about its own centre (the warped pivot was 6-8% of
         # ex-ex off it): the bound vertices keep their distance to the pivot within the cornea
         # bulge, and the pivot is the sphere's centre to 1% of ex-ex
-        from autobones.rig_transfer.pipeline import fit_sphere
+        from autobones.rig_transfer.eyes import fit_sphere
 
         P = rig.vertices[bound]
         centre, radius = fit_sphere(P)
@@ -96,7 +96,8 @@ def test_generic_landmarks_land_on_the_heads_landmarks():
     """The generic rig's own landmarks, carried by the correspondence, land on ICT identity002's
     published ones: within 3% mean / 6% max of the eye-corner distance (ex-ex). With the
     landmark term at weight 1 (the old default) they were 7.0% / 14% off; at 30, 1.75% / 4.2%."""
-    from autobones.rig_transfer.pipeline import load_generic, ride
+    from autobones.rig_transfer.pipeline import load_generic
+    from autobones.rig_transfer.under_skin import ride
 
     mesh, marks = HEADS["ict"]
     details = {}
@@ -113,7 +114,7 @@ def test_generic_landmarks_land_on_the_heads_landmarks():
 
 
 def test_fit_sphere_recovers_a_sphere_and_ignores_its_frame():
-    from autobones.rig_transfer.pipeline import fit_sphere
+    from autobones.rig_transfer.eyes import fit_sphere
 
     rng = np.random.default_rng(0)
     d = rng.normal(size=(400, 3))
@@ -222,3 +223,71 @@ def test_place_with_landmarks_builds_facial_bones_on_the_transferred_rig(transfe
     C = rig.frame.to_canonical(S.heads)
     stomion = rig.frame.to_canonical(lm["stomion"][None])[0]
     assert (C[kids[jaw], 1] < stomion[1] + 0.02).all()
+
+
+def test_a_trimesh_gives_the_same_rig_as_its_arrays():
+    import trimesh
+
+    from autobones.io.mesh import default_head
+
+    V, F = default_head()
+    marks = ROOT / "generic_rig" / "default_head.landmarks.json"
+    a = autobones.transfer((V, F), marks)
+    b = autobones.transfer(trimesh.Trimesh(V, F, process=False), marks)
+    assert a.weights.tobytes() == b.weights.tobytes()
+    assert a.skeleton.heads.tobytes() == b.skeleton.heads.tobytes()
+    assert json.dumps(a.sidecar()) == json.dumps(b.sidecar())
+
+
+@pytest.mark.parametrize("bad", [
+    type("NoFaces", (), {"vertices": np.zeros((4, 3)), "faces": np.zeros((2, 3))}),      # float faces
+    type("Ragged", (), {"vertices": [[0.0, 1.0], [2.0]], "faces": [[0, 1, 2]]}),        # not an array
+    type("Flat", (), {"vertices": np.zeros((4, 3)), "faces": np.array([[0, 1, 2]] * 4)}),
+])
+def test_a_mesh_object_with_bad_attributes_gives_one_clear_error(bad):
+    from autobones.io.mesh import resolve_mesh
+
+    with pytest.raises(AutobonesError, match=bad.__name__):
+        resolve_mesh(bad())
+    with pytest.raises(AutobonesError):
+        autobones.transfer(bad(), ROOT / "generic_rig" / "default_head.landmarks.json")
+    with pytest.raises(AutobonesError, match="expected a file path"):
+        resolve_mesh(3.5)
+
+
+def test_transfer_leaves_a_given_generic_rig_untouched():
+    from autobones.rig_transfer.pipeline import load_generic
+
+    generic = load_generic()
+    before = dict(vars(generic))
+    autobones.transfer(None, ROOT / "generic_rig" / "default_head.landmarks.json", rig=generic)
+    assert vars(generic).keys() == before.keys()
+    assert all(vars(generic)[k] is v for k, v in before.items())
+
+
+def test_typed_sidecar_attributes_round_trip(tmp_path):
+    rig = autobones.transfer(None, ROOT / "generic_rig" / "default_head.landmarks.json")
+    assert rig.source == "default_head.obj" and len(rig.muscles) == 26
+    assert rig.field_labels["region"][0] == "scalp" and rig.landmarks["stomion"].shape == (3,)
+    assert rig.facial_bone_partner is None and rig.batch is None
+    assert dict(rig.extra) == {k: v for k, v in rig.sidecar().items() if k in rig.sidecar_extra()}
+    with pytest.raises(TypeError):
+        rig.extra["muscles"] = []
+    rig.other = {"future_key": [1, 2]}
+    glb, side, _ = rig.save(tmp_path / "r.glb")
+    again = autobones.load_rig(glb)
+    assert again.muscles == json.loads(json.dumps(rig.muscles))
+    assert again.other == {"future_key": [1, 2]} and again.expressions is not None
+    assert all(np.array_equal(again.landmarks[n], rig.landmarks[n]) for n in rig.landmarks)
+    again.save(tmp_path / "s.glb")
+    assert (tmp_path / "s.rig.json").read_text() == (tmp_path / "r.rig.json").read_text()
+
+
+def test_spread_subsample_picks_far_apart_points():
+    from autobones.rig_transfer.under_skin import spread_subsample
+
+    rng = np.random.default_rng(1)
+    P = np.r_[rng.normal(size=(500, 3)) * 0.01, [[5.0, 0, 0], [-5.0, 0, 0]]]
+    idx = spread_subsample(P, 3)
+    assert len(set(idx.tolist())) == 3 and {500, 501} <= set(idx.tolist())
+    assert len(spread_subsample(P[:2], 10)) == 2

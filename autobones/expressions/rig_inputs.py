@@ -21,11 +21,7 @@ class RigInputs(NamedTuple):
 
 
 def rig_inputs(rig):
-    """The :class:`RigInputs` of ``rig`` (empty where the rig has none).
-
-    The one place the expressions package reads these from the rig: today from
-    ``rig.extra['muscles' | 'landmarks' | 'field_labels']``.
-    """
-    extra = getattr(rig, "extra", None) or {}
-    return RigInputs(extra.get("muscles") or getattr(rig, "muscles", None) or [],
-                     extra.get("landmarks") or {}, extra.get("field_labels") or {})
+    """The :class:`RigInputs` of ``rig``: a transferred :class:`autobones.rig.Rig`'s typed
+    ``muscles``, ``landmarks`` and ``field_labels`` (empty where the rig has none, as a placed rig)."""
+    return RigInputs(getattr(rig, "muscles", None) or [], getattr(rig, "landmarks", None) or {},
+                     getattr(rig, "field_labels", None) or {})

@@ -1,10 +1,11 @@
-"""Write a skinned mesh as binary glTF 2.0 (.glb).
+"""Write a triangle mesh as binary glTF 2.0 (.glb): skinned (a rig) or static (a posed mesh).
 
-One mesh, one skin, one joint node per bone. Each joint's local +Y axis points
-from its head to its tail (Blender's bone convention), so an importer rebuilds
-the bones as placed. The bind pose is the rest pose: with no joint moved, the
-skinned mesh is the input mesh exactly (float32 positions as given, in the
-input's own frame and units).
+One container writer for both: :func:`glb_bytes` lays out one mesh, its accessors and
+one binary buffer; a :class:`Skin` adds joint nodes, ``JOINTS_0``/``WEIGHTS_0`` and the
+skin; a static mesh is the same file minus the skin. Each joint's local +Y axis points
+from its head to its tail (Blender's bone convention), so an importer rebuilds the bones
+as placed. The bind pose is the rest pose: with no joint moved, the skinned mesh is the
+input mesh exactly (float32 positions as given, in the input's own frame and units).
 
 The container is small enough to write directly with numpy, struct and json;
 tests read it back with two independent libraries (pygltflib, trimesh), the
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import json
 import struct
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -74,6 +76,192 @@ def _quaternion(R):
     return (q * np.sign(q[3] or 1.0)).tolist()
 
 
+@dataclass
+class Skin:
+    """What a skinned file adds to a static one (see :func:`skin_for`).
+
+    nodes : list of dict
+        glTF nodes: one per joint (index = bone index), then the markers.
+    roots : list of int
+        Joint nodes without a parent (scene roots; the first is the skin's ``skeleton``).
+    joints : (n, k) uint8 or uint16
+        Bone indices per vertex (``JOINTS_0``), uint16 when there are more than 256 bones.
+    weights : (n, k) float32
+        Their weights (``WEIGHTS_0``), rows summing to 1.
+    inverse_binds : (b, 16) float32
+        Inverse bind matrices, column-major.
+    """
+
+    nodes: list
+    roots: list
+    joints: np.ndarray
+    weights: np.ndarray
+    inverse_binds: np.ndarray
+
+
+def joint_nodes(skeleton, markers=()):
+    """glTF nodes of the skeleton and its markers, and the inverse bind matrices.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        Bones (heads, tails in the mesh's frame and units; parents before children not required).
+    markers : sequence of (name, bone name, (3,) position)
+        Extra named nodes parented to a bone, positions in the skeleton's frame.
+
+    Returns
+    -------
+    nodes : list of dict
+        One node per bone (local translation and rotation quaternion, ``children``), then
+        one per marker (translation in its bone's frame).
+    inverse_binds : (b, 16) float32
+        Inverse of each bone's world transform (rotation with +Y head -> tail, origin at the
+        head), column-major as glTF stores MAT4.
+    """
+    R = _bone_rotations(skeleton)
+    nodes, ibm = [], []
+    for i, name in enumerate(skeleton.names):
+        p = skeleton.parents[i]
+        if p < 0:
+            local_R, local_t = R[i], skeleton.heads[i]
+        else:
+            local_R = R[p].T @ R[i]
+            local_t = R[p].T @ (skeleton.heads[i] - skeleton.heads[p])
+        nodes.append({"name": name, "translation": [float(v) for v in local_t], "rotation": _quaternion(local_R)})
+        G = np.eye(4)
+        G[:3, :3], G[:3, 3] = R[i], skeleton.heads[i]
+        ibm.append(np.linalg.inv(G).T.ravel())  # column-major
+    for i, p in enumerate(skeleton.parents):
+        if p >= 0:
+            nodes[p].setdefault("children", []).append(i)
+    for name, bone, position in markers:
+        b = skeleton.index(bone)
+        local = R[b].T @ (np.asarray(position, dtype=np.float64) - skeleton.heads[b])
+        nodes[b].setdefault("children", []).append(len(nodes))
+        nodes.append({"name": name, "translation": [float(v) for v in local]})
+    return nodes, np.array(ibm, dtype=np.float32)
+
+
+def skin_for(skeleton, W, max_influences=4, markers=()):
+    """The :class:`Skin` binding a mesh to ``skeleton`` with weights ``W`` (n, b) float,
+    keeping each vertex's ``max_influences`` largest weights (:func:`top_influences`)."""
+    joints, weights = top_influences(W, max_influences)
+    nodes, ibm = joint_nodes(skeleton, markers)
+    jdtype = np.uint8 if len(skeleton) <= 256 else np.uint16
+    roots = [i for i, p in enumerate(skeleton.parents) if p < 0]
+    return Skin(nodes=nodes, roots=roots, joints=joints.astype(jdtype), weights=weights, inverse_binds=ibm)
+
+
+class GlbBuffer:
+    """The binary chunk of a .glb being laid out: one buffer, one view per accessor.
+
+    Each array is appended tightly packed and padded to 4 bytes (glTF's alignment).
+    """
+
+    def __init__(self):
+        self.blobs, self.views, self.accessors = [], [], []
+
+    def add(self, array, ctype, atype, target=None, minmax=False):
+        """Append ``array`` (its bytes as they are) as an accessor; returns the accessor index.
+
+        ``ctype``: glTF component type (FLOAT, UBYTE, USHORT, UINT) matching the array's dtype;
+        ``atype``: SCALAR, VEC3, VEC4 or MAT4; ``target``: the view's GPU target, if any;
+        ``minmax``: record per-component min and max (required for POSITION).
+        """
+        data = np.ascontiguousarray(array).tobytes()
+        offset = self.byte_length()
+        self.blobs.append(data + b"\0" * (-len(data) % 4))
+        view = {"buffer": 0, "byteOffset": offset, "byteLength": len(data)}
+        if target:
+            view["target"] = target
+        self.views.append(view)
+        acc = {"bufferView": len(self.views) - 1, "componentType": ctype, "count": int(len(array)), "type": atype}
+        if minmax:
+            acc["min"] = array.min(axis=0).tolist()
+            acc["max"] = array.max(axis=0).tolist()
+        self.accessors.append(acc)
+        return len(self.accessors) - 1
+
+    def byte_length(self):
+        """Bytes appended so far, padding included."""
+        return sum(len(b) for b in self.blobs)
+
+    def body(self):
+        """The BIN chunk's contents."""
+        return b"".join(self.blobs)
+
+
+def pack_glb(doc, body):
+    """A binary glTF 2.0 file: 12-byte header, JSON chunk (space-padded), BIN chunk."""
+    js = json.dumps(doc, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    total = 12 + 8 + len(js) + 8 + len(body)
+    return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(js), b"JSON") + js
+            + struct.pack("<I4s", len(body), b"BIN\0") + body)
+
+
+def _add_morph_targets(buf, mesh, morph_targets, V):
+    """Append the morph targets' POSITION deltas to ``buf`` and list them on ``mesh`` (in place)."""
+    targets, target_names = [], []
+    for name, delta in morph_targets:
+        delta = np.asarray(delta, dtype=np.float32)
+        if delta.shape != V.shape:
+            raise ValueError(f"morph target {name!r}: shape {delta.shape}, expected {V.shape}")
+        targets.append({"POSITION": buf.add(delta, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)})
+        target_names.append(str(name))
+    if targets:
+        mesh["primitives"][0]["targets"] = targets
+        mesh["weights"] = [0.0] * len(targets)
+        mesh["extras"] = {"targetNames": target_names}
+
+
+def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
+    """The .glb file of one triangle mesh, skinned when ``skin`` is given, as bytes.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertices in the mesh's own frame and units (written as float32).
+    F : (m, 3) int
+        Triangles, 0-based (written as uint32).
+    skin : Skin or None
+        From :func:`skin_for`; None writes a static mesh (one node, no skin).
+    extras : dict or None
+        JSON-serialisable data stored in the asset's ``extras``.
+    morph_targets : sequence of (name, (n, 3) float)
+        See :func:`write_glb`.
+    """
+    V = np.asarray(V, dtype=np.float32)
+    F = np.asarray(F, dtype=np.uint32)
+    buf = GlbBuffer()
+    attributes = {"POSITION": buf.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)}
+    primitive = {"attributes": attributes, "indices": buf.add(F.ravel(), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER),
+                 "mode": 4}
+    nodes, roots, skins, mesh_node = [], [], {}, {"name": "head_mesh", "mesh": 0}
+    if skin is not None:
+        jtype = UBYTE if skin.joints.dtype == np.uint8 else USHORT
+        attributes["JOINTS_0"] = buf.add(skin.joints, jtype, "VEC4", ARRAY_BUFFER)
+        attributes["WEIGHTS_0"] = buf.add(skin.weights, FLOAT, "VEC4", ARRAY_BUFFER)
+        inv = buf.add(skin.inverse_binds, FLOAT, "MAT4")
+        nodes, roots, mesh_node["skin"] = skin.nodes, skin.roots, 0
+        skins = {"skins": [{"name": "rig", "joints": list(range(len(skin.inverse_binds))), "skeleton": roots[0],
+                            "inverseBindMatrices": inv}]}
+    mesh = {"name": "head_mesh", "primitives": [primitive]}
+    _add_morph_targets(buf, mesh, morph_targets, V)
+    doc = {
+        "asset": {"version": "2.0", "generator": "autobones", **({"extras": extras} if extras else {})},
+        "scene": 0,
+        "scenes": [{"nodes": roots + [len(nodes)]}],
+        "nodes": nodes + [mesh_node],
+        "meshes": [mesh],
+        **skins,
+        "accessors": buf.accessors,
+        "bufferViews": buf.views,
+        "buffers": [{"byteLength": buf.byte_length()}],
+    }
+    return pack_glb(doc, buf.body())
+
+
 def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=(), morph_targets=()):
     """Write the skinned mesh to ``path``.
 
@@ -101,93 +289,10 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         give the shape keys), default weights 0 so the rest pose is unchanged. glTF
         applies them before skinning. None given: the file is exactly as without them.
     """
-    V = np.asarray(V, dtype=np.float32)
-    F = np.asarray(F, dtype=np.uint32)
-    joints, weights = top_influences(W, max_influences)
-    jtype, jdtype = (UBYTE, np.uint8) if len(skeleton) <= 256 else (USHORT, np.uint16)
-
-    R = _bone_rotations(skeleton)
-    nodes, ibm = [], []
-    for i, name in enumerate(skeleton.names):
-        p = skeleton.parents[i]
-        if p < 0:
-            local_R, local_t = R[i], skeleton.heads[i]
-        else:
-            local_R = R[p].T @ R[i]
-            local_t = R[p].T @ (skeleton.heads[i] - skeleton.heads[p])
-        nodes.append({"name": name, "translation": [float(v) for v in local_t], "rotation": _quaternion(local_R)})
-        G = np.eye(4)
-        G[:3, :3], G[:3, 3] = R[i], skeleton.heads[i]
-        ibm.append(np.linalg.inv(G).T.ravel())  # column-major
-    for i, p in enumerate(skeleton.parents):
-        if p >= 0:
-            nodes[p].setdefault("children", []).append(i)
-    ibm = np.array(ibm, dtype=np.float32)
-    for name, bone, position in markers:
-        b = skeleton.index(bone)
-        local = R[b].T @ (np.asarray(position, dtype=np.float64) - skeleton.heads[b])
-        nodes[b].setdefault("children", []).append(len(nodes))
-        nodes.append({"name": name, "translation": [float(v) for v in local]})
-
-    blobs, views, accessors = [], [], []
-
-    def add(array, ctype, atype, target=None, minmax=False):
-        data = np.ascontiguousarray(array).tobytes()
-        offset = sum(len(b) for b in blobs)
-        blobs.append(data + b"\0" * (-len(data) % 4))
-        view = {"buffer": 0, "byteOffset": offset, "byteLength": len(data)}
-        if target:
-            view["target"] = target
-        views.append(view)
-        acc = {"bufferView": len(views) - 1, "componentType": ctype, "count": int(len(array)), "type": atype}
-        if minmax:
-            acc["min"] = array.min(axis=0).tolist()
-            acc["max"] = array.max(axis=0).tolist()
-        accessors.append(acc)
-        return len(accessors) - 1
-
-    pos = add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)
-    ind = add(F.ravel(), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
-    jnt = add(joints.astype(jdtype), jtype, "VEC4", ARRAY_BUFFER)
-    wgt = add(weights, FLOAT, "VEC4", ARRAY_BUFFER)
-    inv = add(ibm, FLOAT, "MAT4")
-    targets, target_names = [], []
-    for name, delta in morph_targets:
-        delta = np.asarray(delta, dtype=np.float32)
-        if delta.shape != V.shape:
-            raise ValueError(f"morph target {name!r}: shape {delta.shape}, expected {V.shape}")
-        targets.append({"POSITION": add(delta, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)})
-        target_names.append(str(name))
-
-    mesh_node = len(nodes)
-    n_joints = len(skeleton)
-    roots = [i for i, p in enumerate(skeleton.parents) if p < 0]
-    primitive = {"attributes": {"POSITION": pos, "JOINTS_0": jnt, "WEIGHTS_0": wgt}, "indices": ind, "mode": 4}
-    mesh = {"name": "head_mesh", "primitives": [primitive]}
-    if targets:
-        primitive["targets"] = targets
-        mesh["weights"] = [0.0] * len(targets)
-        mesh["extras"] = {"targetNames": target_names}
-    doc = {
-        "asset": {"version": "2.0", "generator": "autobones", **({"extras": extras} if extras else {})},
-        "scene": 0,
-        "scenes": [{"nodes": roots + [mesh_node]}],
-        "nodes": nodes + [{"name": "head_mesh", "mesh": 0, "skin": 0}],
-        "meshes": [mesh],
-        "skins": [{"name": "rig", "joints": list(range(n_joints)), "skeleton": roots[0],
-                   "inverseBindMatrices": inv}],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": sum(len(b) for b in blobs)}],
-    }
-    body = b"".join(blobs)
-    js = json.dumps(doc, separators=(",", ":")).encode()
-    js += b" " * (-len(js) % 4)
-    total = 12 + 8 + len(js) + 8 + len(body)
+    data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers), extras=extras,
+                     morph_targets=morph_targets)
     with open(path, "wb") as fh:
-        fh.write(struct.pack("<4sII", b"glTF", 2, total))
-        fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
-        fh.write(struct.pack("<I4s", len(body), b"BIN\0") + body)
+        fh.write(data)
 
 
 def read_glb(path):

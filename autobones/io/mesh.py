@@ -1,6 +1,7 @@
 """Load a triangle mesh keeping the user's vertices exactly, in the user's order.
 
-Goes beyond the seeds: 003/004 assume a clean single mesh. Real heads arrive as
+The bone-placement method of ``place`` and Orvalho, Zacur & Susin 2008 assume a
+clean single mesh. Real heads arrive as
 OBJ with quads and UV seams, PLY in odd units, glTF scenes, separate parts.
 trimesh's default OBJ loader splits vertices at UV seams and merges duplicates,
 so vertex i of the file would no longer be vertex i of the result; for OBJ we
@@ -14,6 +15,7 @@ import os
 import numpy as np
 
 from ..errors import AutobonesError
+from .obj import read_obj
 
 SUPPORTED = (".obj", ".ply", ".off", ".stl", ".glb", ".gltf")
 
@@ -57,7 +59,7 @@ def load_mesh(path):
         raise AutobonesError(f"{path}: {size / 1024**3:.1f} GiB is too large for a head mesh")
     try:
         if ext == ".obj":
-            V, F = _read_obj(path)
+            V, F = read_obj(path)
         else:
             V, F = _read_trimesh(path)
     except AutobonesError:
@@ -70,6 +72,61 @@ def load_mesh(path):
             why = f"{exc.__class__.__name__}: {text}"
         raise AutobonesError(f"{path}: not a readable {ext[1:].upper()} mesh ({why})") from exc
     return check_mesh(V, F, name=name)
+
+
+def default_head():
+    """(V, F) of the built-in default head (metres, +Y up, +Z front)."""
+    from ..generic_rig import default_head_path
+
+    return load_mesh(default_head_path())
+
+
+def resolve_mesh(mesh):
+    """The mesh argument of ``place``, ``transfer``, ``transfer_attributes`` and ``build_rig``.
+
+    Parameters
+    ----------
+    mesh : str, os.PathLike, (V, F) pair, mesh object or None
+        A mesh file (:func:`load_mesh`); arrays ``V`` (n, 3) and ``F`` (m, 3); any object with
+        ``vertices`` and ``faces`` attributes (``trimesh.Trimesh``, an ``open3d`` mesh's
+        ``vertices``/``triangles`` are not this: convert first); None for the built-in default head.
+
+    Returns
+    -------
+    V : (n, 3) float64
+        Vertices in the mesh's own frame and units, in its order.
+    F : (m, 3) int64
+        Triangles.
+    source : str or None
+        The file's base name (the default head's for None); None for arrays and objects.
+
+    Raises
+    ------
+    AutobonesError
+        Unreadable file, bad arrays (:func:`check_mesh`), or an argument of another type.
+    """
+    if mesh is None:
+        from ..generic_rig import default_head_path
+
+        return (*default_head(), os.path.basename(default_head_path()))
+    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        V, F = check_mesh(*mesh)
+        return V, F, None
+    if isinstance(mesh, (str, bytes, os.PathLike)):
+        # the file name only: a sidecar must not change when the folder moves (batch, clusters)
+        return (*load_mesh(mesh), os.path.basename(os.fspath(mesh)))
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        name = type(mesh).__name__
+        try:
+            V, F = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+        except (TypeError, ValueError) as exc:
+            raise AutobonesError(f"{name}: its vertices and faces are not numeric arrays ({exc})") from None
+        if not (np.issubdtype(F.dtype, np.integer) or (F.size == 0 and F.ndim == 2)):
+            raise AutobonesError(f"{name}: faces must be integer vertex indices, got dtype {F.dtype}")
+        V, F = check_mesh(V, F, name=name)
+        return V, F, None
+    raise AutobonesError(f"mesh: expected a file path, a (V, F) pair, an object with vertices and faces "
+                         f"(trimesh.Trimesh) or None, got {type(mesh).__name__}")
 
 
 def check_mesh(V, F, name="mesh"):
@@ -99,32 +156,6 @@ def check_mesh(V, F, name="mesh"):
     if not (area > 0).any():
         raise AutobonesError(f"{name}: every face has zero area")
     return V, F
-
-
-def _read_obj(path):
-    verts, faces = [], []
-    with open(path, "rb") as fh:
-        for lineno, raw in enumerate(fh, 1):
-            if raw[:2] == b"v ":
-                parts = raw.split()
-                if len(parts) < 4:
-                    raise AutobonesError(f"{path}:{lineno}: vertex line needs 3 coordinates")
-                verts.append((float(parts[1]), float(parts[2]), float(parts[3])))
-            elif raw[:2] == b"f ":
-                idx = []
-                for tok in raw.split()[1:]:
-                    i = int(tok.split(b"/")[0])
-                    # OBJ is 1-based; negative indices count back from the last vertex so far
-                    idx.append(i - 1 if i > 0 else len(verts) + i)
-                    if i == 0:
-                        raise AutobonesError(f"{path}:{lineno}: face index 0 (OBJ indices start at 1)")
-                if len(idx) < 3:
-                    raise AutobonesError(f"{path}:{lineno}: a face needs at least 3 vertices")
-                # polygons are fanned: (0, k, k+1)
-                faces.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
-    if not verts:
-        raise AutobonesError(f"{path}: no vertex lines ('v x y z') found; not an OBJ mesh")
-    return np.array(verts, dtype=np.float64), np.array(faces, dtype=np.int64).reshape(-1, 3)
 
 
 def _read_trimesh(path):

@@ -1,7 +1,7 @@
 """Write a posed mesh (vertices and triangles, no rig) as OBJ or GLB, atomically.
 
-Goes beyond the seeds: the output of ``autobones pose``. Vertex *i* of the file is vertex
-*i* of the rig (nothing merged, nothing reordered), in the rig's input frame and units.
+The output of ``autobones pose``. Vertex *i* of the file is vertex *i* of the rig
+(nothing merged, nothing reordered), in the rig's input frame and units.
 """
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from .atomic import output_folder, write_bytes_atomic
+from .gltf import glb_bytes
 
 FORMATS = (".obj", ".glb")
 
@@ -20,9 +21,9 @@ def write_posed_mesh(path, V, F, comment=None):
     """Write ``V`` (n, 3) float and ``F`` (m, 3) int to ``path`` (.obj or .glb).
 
     OBJ: ``v`` lines with 9 significant digits (float32 precision and more), 1-based
-    ``f`` lines. GLB: a static glTF 2.0 mesh (float32 positions, no skin, no normals),
-    through trimesh with processing off. The file is written under a temporary name in
-    the target folder and renamed when complete.
+    ``f`` lines. GLB: a static glTF 2.0 mesh (float32 positions, uint32 indices, no skin,
+    no normals), written by :func:`autobones.io.gltf.glb_bytes`. The file is written under
+    a temporary name in the target folder and renamed when complete.
 
     Parameters
     ----------
@@ -50,8 +51,6 @@ def write_posed_mesh(path, V, F, comment=None):
         np.savetxt(buf, F + 1, fmt="f %d %d %d")
         data = buf.getvalue().encode()
     else:
-        import trimesh
-
-        data = trimesh.Trimesh(V, F, process=False, validate=False).export(file_type="glb")
+        data = glb_bytes(V, F)  # the rig's container writer, minus the skin
     write_bytes_atomic(path, data, "the posed mesh")
     return path

@@ -1,6 +1,6 @@
 """Read a rig back from the files ``Rig.save`` writes: ``x.glb``, ``x.rig.json``, ``x.weights.npz``.
 
-Goes beyond the seeds: the saved rig is the hand-off between rigging and animation, so
+Beyond Orvalho, Zacur & Susin 2008: the saved rig is the hand-off between rigging and animation, so
 ``autobones.load_rig("head.glb").pose(au={12: 0.8})`` must give what the in-memory rig
 gave. The glb supplies the triangles (and, for files saved before the sidecar kept them,
 the float32 positions); the sidecar the frame, bones, labels, muscles, landmarks and
@@ -18,10 +18,10 @@ import numpy as np
 from ..errors import AutobonesError
 from .gltf import read_accessor, read_glb
 from ..orient import Frame
-from ..rig import Rig, sidecar_paths
+from ..rig import Rig, sidecar_attributes, sidecar_paths
 from ..skeleton import Skeleton
 
-# sidecar keys the Rig rebuilds itself; every other key goes back into ``rig.extra``
+# sidecar keys the Rig rebuilds itself; every other key goes to its typed attributes (rig.sidecar_attributes)
 _OWN_KEYS = ("format", "autobones_version", "options", "frame", "vertex_count", "bones", "label_names", "labels",
              "facial_mask", "depth_merge_distances")
 
@@ -40,10 +40,11 @@ def load_rig(path):
         ``vertices`` (n, 3) float64 in the input frame and units: the exact input vertices
         kept in the npz (rigs saved before it kept them: the glb's float32 positions),
         ``faces`` (m, 3) int64 from the glb, ``skeleton``, ``weights`` (n, b) float64 (saved
-        as float32), ``labels``, ``facial_mask``, ``frame``, ``options``, ``fields`` and
-        ``extra`` (muscles, landmarks, expression definitions...). ``rig.pose(...)`` works
+        as float32), ``labels``, ``facial_mask``, ``frame``, ``options``, ``fields`` and the
+        sidecar's typed attributes (``muscles``, ``landmarks``, ``field_labels``, ``expressions``
+        with its definitions...; see :class:`autobones.rig.Rig`). ``rig.pose(...)`` works
         when the rig has muscles (``transfer``); the model is fitted again on first use
-        (about a second on a 27k-vertex head) with the definitions the sidecar kept
+        with the definitions the sidecar kept
         (``rig.expression_model(other)`` to use others). The sidecar pins the numbers, not
         the code: a newer autobones poses with its own model code and the saved numbers
         (a parameter they lack takes the code's default).
@@ -61,6 +62,39 @@ def load_rig(path):
     >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
     """
     path = os.fspath(path)
+    doc, body = _read_autobones_glb(path)
+    json_path, npz_path = sidecar_paths(path)
+    for side in (json_path, npz_path):
+        if not os.path.isfile(side):
+            raise AutobonesError(f"{path}: its sidecar {side} is missing (autobones writes the glb, "
+                                 f"{os.path.basename(json_path)} and {os.path.basename(npz_path)} together; "
+                                 "keep them beside each other)")
+    meta, skeleton, frame, labels, mask = _read_sidecar(json_path)
+    names = skeleton.names
+    try:
+        with np.load(npz_path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        W = arrays["weights"].astype(np.float64)
+        saved_names = [str(s) for s in arrays.get("bone_names", names)]
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
+        raise AutobonesError(f"{npz_path}: not a readable autobones weights file ({type(exc).__name__}: {exc})") from None
+    try:
+        prim = doc["meshes"][0]["primitives"][0]
+        F = read_accessor(doc, body, prim["indices"]).astype(np.int64).reshape(-1, 3)
+        P = read_accessor(doc, body, prim["attributes"]["POSITION"])
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise AutobonesError(f"{path}: its mesh cannot be read ({type(exc).__name__}: {exc})") from None
+    V = arrays.get("vertices")
+    V = P.astype(np.float64) if V is None else np.asarray(V, dtype=np.float64)
+    _check_together(path, len(mask), P, V, F, W, labels, names, saved_names)
+    fields = {k[len("field/"):]: v for k, v in arrays.items() if k.startswith("field/")}
+    return Rig(vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=mask, frame=frame,
+               options=dict(meta.get("options") or {}), fields=fields,
+               **sidecar_attributes({k: v for k, v in meta.items() if k not in _OWN_KEYS}))
+
+
+def _read_autobones_glb(path):
+    """(glTF JSON dict, binary chunk bytes) of a glb written by autobones; AutobonesError otherwise."""
     if not os.path.isfile(path):
         raise AutobonesError(f"{path}: no such file")
     try:
@@ -71,12 +105,11 @@ def load_rig(path):
     if asset.get("generator") != "autobones":
         raise AutobonesError(f"{path}: not a rig written by autobones (generator {asset.get('generator')!r}); "
                              "rig the mesh first: autobones transfer HEAD -o OUT.glb")
-    json_path, npz_path = sidecar_paths(path)
-    for side in (json_path, npz_path):
-        if not os.path.isfile(side):
-            raise AutobonesError(f"{path}: its sidecar {side} is missing (autobones writes the glb, "
-                                 f"{os.path.basename(json_path)} and {os.path.basename(npz_path)} together; "
-                                 "keep them beside each other)")
+    return doc, body
+
+
+def _read_sidecar(json_path):
+    """The ``.rig.json`` sidecar: (its dict, Skeleton, Frame, labels (n,) int8, facial mask (n,) bool)."""
     try:
         with open(json_path, encoding="utf-8") as fh:
             meta = json.load(fh)
@@ -103,21 +136,12 @@ def load_rig(path):
         mask[np.asarray(meta.get("facial_mask", []), dtype=np.int64)] = True
     except (OSError, ValueError, KeyError, TypeError, IndexError, AssertionError) as exc:
         raise AutobonesError(f"{json_path}: not a readable autobones sidecar ({type(exc).__name__}: {exc})") from None
-    try:
-        with np.load(npz_path, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        W = arrays["weights"].astype(np.float64)
-        saved_names = [str(s) for s in arrays.get("bone_names", names)]
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
-        raise AutobonesError(f"{npz_path}: not a readable autobones weights file ({type(exc).__name__}: {exc})") from None
-    try:
-        prim = doc["meshes"][0]["primitives"][0]
-        F = read_accessor(doc, body, prim["indices"]).astype(np.int64).reshape(-1, 3)
-        P = read_accessor(doc, body, prim["attributes"]["POSITION"])
-    except (KeyError, IndexError, TypeError, ValueError) as exc:
-        raise AutobonesError(f"{path}: its mesh cannot be read ({type(exc).__name__}: {exc})") from None
-    V = arrays.get("vertices")
-    V = P.astype(np.float64) if V is None else np.asarray(V, dtype=np.float64)
+    return meta, skeleton, frame, labels, mask
+
+
+def _check_together(path, n, P, V, F, W, labels, names, saved_names):
+    """AutobonesError unless the glb positions ``P``, npz vertices ``V`` and weights ``W`` and the
+    sidecar's ``n`` vertices, ``labels`` and bone ``names`` describe one rig."""
     problems = []
     if len(P) != n or V.shape != (n, 3) or labels.shape != (n,):
         problems.append(f"vertex counts differ (glb {len(P)}, sidecar {n}, npz {len(V)})")
@@ -131,7 +155,3 @@ def load_rig(path):
     if problems:
         raise AutobonesError(f"{path}: the glb and its sidecars do not belong together: {'; '.join(problems)} "
                              "(save the rig again)")
-    fields = {k[len("field/"):]: v for k, v in arrays.items() if k.startswith("field/")}
-    extra = {k: v for k, v in meta.items() if k not in _OWN_KEYS}
-    return Rig(vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=mask, frame=frame,
-               options=dict(meta.get("options") or {}), extra=extra, fields=fields)

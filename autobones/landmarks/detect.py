@@ -44,7 +44,7 @@ from ..io.landmark_names import NAMES, mirror_name
 from ..io.mesh import resolve_mesh
 from ..orient import Frame, detect_frame
 from ..render.camera import orthographic_camera
-from ..render.rasterize import rasterize, shade, surface_points
+from ..render.raster import rasterize, shade, surface_points
 from .mediapipe import MEDIAPIPE_POINTS, MediaPipeFaceMesh, quiet_stderr
 from .orientation import face_axes, nose_forward, plausible, squared_frame, turn_degrees, turns
 from .refine import refine

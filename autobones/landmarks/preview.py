@@ -13,7 +13,7 @@ from ..errors import AutobonesError
 from ..io.atomic import output_folder
 from ..orient import detect_frame, frame_from_landmarks
 from ..render.draw import draw_points, save_png
-from ..render.rasterize import rasterize, shade
+from ..render.raster import rasterize, shade
 from .views import face_camera
 
 #: Marker colours: midline names, subject's left, subject's right (RGB).

@@ -1,1 +1,15 @@
-"""TODO"""
+"""``autobones place``: bones and smooth skin weights on a head with no landmarks.
+
+The bone-placement method of ``place`` (average-linkage grouping by depth, k-means facial bones
+at a chosen density, smooth skinning), one module a stage:
+
+- ``segment``: average-linkage clustering of the head by depth into face, middle and back; the
+  head and neck bones;
+- ``facial_bones``: mirror-symmetric k-means facial bones on the facial mask;
+- ``skin_weights``: bone heat (heat diffusion from each bone) on the intrinsic Laplacian;
+- ``pipeline``: :func:`place`, which runs load -> orient -> segment -> facial bones -> weights and
+  returns a :class:`autobones.rig.Rig`.
+"""
+from .pipeline import place
+
+__all__ = ["place"]

@@ -1,4 +1,7 @@
-"""``place``: landmark-free head, neck and facial bones with smooth skin weights (seed 003).
+"""``place``: landmark-free head, neck and facial bones with smooth skin weights.
+
+The bone-placement method of ``place``: average-linkage grouping of the head by depth
+(head and neck bones), k-means facial bones, bone-heat skin weights.
 
 The pipeline, one module a stage: load (io.mesh) -> orient -> segment (head and
 neck bones) -> facial (facial bones) -> weights -> Rig (save writes io.gltf).
@@ -7,13 +10,12 @@ All geometry runs in the canonical frame; results go back to the input frame.
 from __future__ import annotations
 
 import logging
-import os
 import time
 
 import numpy as np
 
 from .facial_bones import bone_count, facial_bones
-from ..io.mesh import check_mesh, load_mesh
+from ..io.mesh import resolve_mesh
 from ..orient import detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -22,26 +24,6 @@ from ..skeleton import Skeleton
 from .skin_weights import bone_heat_weights
 
 log = logging.getLogger("autobones")
-
-
-def default_head():
-    """(V, F) of the built-in default head (metres, +Y up, +Z front)."""
-    from ..generic_rig import default_head_path
-
-    return load_mesh(default_head_path())
-
-
-def resolve_mesh(mesh):
-    """A path, a ``(V, F)`` pair, or None (the default head) -> (V, F, source file name)."""
-    if mesh is None:
-        from ..generic_rig import default_head_path
-
-        return (*default_head(), os.path.basename(default_head_path()))
-    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
-        V, F = check_mesh(*mesh)
-        return V, F, None
-    # the file name only: a sidecar must not change when the folder moves (batch, clusters)
-    return (*load_mesh(mesh), os.path.basename(os.fspath(mesh)))
 
 
 def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
@@ -98,9 +80,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
                "up": up, "front": front, "random_state": random_state}
     return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
-               timings=timings, segmentation=seg,
-               extra={"source": source, "facial_bone_partner": model.partner_.tolist(),
-                      "neck_height_canonical": seg.neck_height})
+               timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
+               neck_height_canonical=seg.neck_height)
 
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
@@ -112,7 +93,7 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
     V, F, frame = base.vertices, base.faces, base.frame
     C = frame.to_canonical(V)
     region = base.fields.get("region")
-    names = base.extra["field_labels"].get("region", [])
+    names = base.field_labels.get("region", [])
     mask = base.labels == 0
     if region is not None:
         mask &= ~np.isin(region, [names.index(n) for n in ("neck", "ears", "scalp") if n in names])
@@ -144,5 +125,5 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
     base.facial_mask = mask
     base.options.update({"command": "place", "density": density if isinstance(density, str) else int(density),
                          "facial_bones": n_bones, "random_state": random_state})
-    base.extra["facial_bone_partner"] = model.partner_.tolist()
+    base.facial_bone_partner = model.partner_.tolist()
     return base

@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from ..geometry.laplacian import factor_spd, laplacian
 from ..geometry.topology import weld
+from ..geometry.weights import prune_weights
 
 CHUNK = 65536
 
@@ -57,22 +58,6 @@ def segment_distances(P, segments):
         t = np.clip(((X - A) * AB).sum(axis=2) / L2, 0.0, 1.0)
         out[s:s + CHUNK] = np.linalg.norm(X - (A + t[..., None] * AB), axis=2)
     return out
-
-
-def prune_weights(W, fraction=0.01):
-    """Zero the weights below ``fraction`` of each row's largest, renormalise the rest.
-
-    Parameters
-    ----------
-    W : (n, b) float
-        Non-negative weights, rows summing to 1.
-
-    Returns
-    -------
-    (n, b) float, rows summing to 1.
-    """
-    W = np.where(W < fraction * W.max(axis=1, keepdims=True), 0.0, W)
-    return W / W.sum(axis=1, keepdims=True)
 
 
 def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):

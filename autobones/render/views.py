@@ -11,7 +11,7 @@ from ..errors import AutobonesError
 from ..geometry.validate import mesh_arrays
 from .camera import image_size, orthographic_camera, unit_vector
 from .draw import draw_points, draw_segments
-from .rasterize import rasterize, shade
+from .raster import rasterize, shade
 
 # name -> (view_dir, up) in the canonical head frame; view_dir points from the
 # head toward the camera.

@@ -1,11 +1,11 @@
 """Dense correspondence by fitting the warped source surface to the target.
 
-Seed 000 ch. 5.6 (Jeong's global alignment) on top of seed 004 §3.1-3.3
-(TPS, then stick). The seeds' pipeline ``STK(TPS(source))`` is only as good as
+Bibliowicz 2005, ch. 5.6 (Jeong's global alignment) on top of Orvalho, Zacur &
+Susin 2008, §3.1-3.3 (TPS, then stick). Their pipeline ``STK(TPS(source))`` is only as good as
 the TPS warp away from the landmarks, and the 27 face landmarks leave the sides
 and back of the head, the ears and the neck to extrapolation. Here the TPS warp
 is only the starting point; the source vertices ``x`` are then moved by
-repeated linear least squares (seed 000 eq. 5.4)::
+repeated linear least squares (Bibliowicz 2005, eq. 5.4)::
 
     E(x) = sum_i w_i ||x_i - c_i||^2                         (distance, 5.2)
          + sum_i r_i ||x_i - m_i||^2                          (reverse distance)
@@ -16,7 +16,7 @@ repeated linear least squares (seed 000 eq. 5.4)::
 - ``c_i``: closest point of the target to ``x_i`` (point-to-plane at the
   nearest target vertex during the iterations), dropped (``c_i = x_i``) when
   the normals differ by more than ``max_angle`` or the distance is an outlier;
-- the reverse term is seed 000's own direction of eq. 5.2 (scan point to
+- the reverse term is Bibliowicz's own direction of eq. 5.2 (scan point to
   its closest point of the mesh, Amberg's symmetric data term): every target
   vertex is matched to its nearest source vertex of the same part (same
   rejections), ``m_i`` is the area-weighted centroid of the target vertices
@@ -24,8 +24,7 @@ repeated linear least squares (seed 000 eq. 5.4)::
   it -- and ``r_i = symmetric_weight * min(area received / own area, 4)``.
   The forward term only pulls along the normal; this one also pulls
   tangentially, so the sides and back of the head, the ears and the neck
-  spread over the target instead of keeping the TPS's tangential error
-  (ICT, 27 landmarks: mean error 0.78 % -> 0.41 %, p95 3.34 % -> 2.71 %).
+  spread over the target instead of keeping the TPS's tangential error.
   It is area- not sample-weighted, so a scan's sampling density does not
   pull the mesh; to keep the matrix constant it is folded into the target
   of the forward term, ``c_i <- (c_i + r_i m_i) / (1 + r_i)``;
@@ -36,14 +35,14 @@ repeated linear least squares (seed 000 eq. 5.4)::
   normal. ``R_ij`` only tilts the normal: without the axis turn, edges around
   every normal near the turn's axis keep the source's heading about it and the
   fit twists the surface sideways to comply (the generic's right side landed
-  across the goat's midline). It is seed 000's smoothness term (a vertex near
+  across the goat's midline). It is Bibliowicz's smoothness term (a vertex near
   its neighbours' centroid) made relative to the source's own differential
   coordinates: it is the uniform graph Laplacian, and with ``R = I, s = 1``
   its minimum is the source itself. We tried the bi-Laplacian form
-  ``||L x - L x_tps||^2`` too: less accurate and its LU factor is 3x larger
+  ``||L x - L x_tps||^2`` too: less accurate and its factor much larger
   (see benchmarks/correspondence.py);
 - the binding term pulls mesh boundary vertices (neck cut, eye and mouth
-  openings) to the target's boundary of the same part: goes beyond the seeds,
+  openings) to the target's boundary of the same part (beyond both papers):
   it is the only cue for where the neck ends;
 - the constraint term holds the source landmarks (barycentric rows ``B``) on
   the target landmarks ``q``.
@@ -54,19 +53,17 @@ first decimated (quadric error, ``fast_simplification``; libigl's
 fit runs on the decimated mesh, its displacements from the TPS warp are
 carried to every source vertex (inverse squared distance of the 4 nearest
 coarse vertices of the same part), and from there ``fine_stages`` (one loose
-stage, 2 iterations) finish at full resolution. Faster (ICT, 26.7k vertices:
-~1 s instead of 2.4 s wall) and more accurate: on the decimated mesh the
-same ``lam`` is stiffer and the reverse term sees a mesh that does not share
-the target's triangulation (ICT mean 0.41 % -> 0.18 %, p95 2.71 % -> 0.80 %;
-on targets remeshed so that they share no vertex layout with the source,
-0.72 % / 2.17 % -> 0.63 % / 1.75 %, see benchmarks/correspondence.py).
+stage, 2 iterations) finish at full resolution. Faster and more accurate:
+on the decimated mesh the same ``lam`` is stiffer and the reverse term sees
+a mesh that does not share the target's triangulation (figures in
+benchmarks/README.md, from benchmarks/correspondence.py).
 
 ``lam`` decreases over stages (stiff, coarse fit first); in each stage the
 normal matrix ``W + lam D^T D + mu W_b + nu B^T B`` is constant (rejected
 matches are held in place rather than given zero weight) and factorised once
 with ``scipy.sparse.linalg.splu`` (symmetric mode, minimum-degree ordering of
-``A + A^T``: a third less fill than COLAMD). A final exact stick
-(:func:`autobones.stick.stick`) puts every vertex on the target surface.
+``A + A^T``: less fill than COLAMD). A final exact stick
+(:func:`autobones.rig_transfer.stick.stick`) puts every vertex on the target surface.
 
 Multi-part meshes (ICT: skin, eyeballs, teeth, gums, mouth socket, ... 56
 parts): the parts are the connected components of each mesh. After the TPS
@@ -187,15 +184,10 @@ def _part_map(src_part, tgt_part, nearest, agree):
     return labels
 
 
-def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark_weight, boundary_weight, max_angle,
-         restrict_parts, exact, edge_reference, symmetric_weight, tgt):
-    """Staged least squares of :func:`fit_surface` from ``X0`` (default: the TPS warp); returns X, labels, seconds."""
-    t1 = time.perf_counter()
+def _source_terms(V_src, F_src, X, tps, P, edge_reference):
+    """Source-side matrices of the fit: edge difference ``D`` (e, n) and ``D^T D``, the reference
+    edges ``edge_src`` (e, 3) with their unit edge normals, vertices in a face, landmark rows ``B``."""
     n = len(V_src)
-    X = tps.transform(V_src)
-    scale = abs(np.linalg.det(tps.affine_[1:])) ** (1.0 / 3.0)
-
-    # --- setup: edges, parts, boundary, landmark rows, nearest-vertex trees
     E = mesh_edges(F_src)
     m = len(E)
     D = sp.csr_matrix((np.r_[np.ones(m), -np.ones(m)], (np.r_[np.arange(m), np.arange(m)], np.r_[E[:, 0], E[:, 1]])),
@@ -206,6 +198,7 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         edge_src = X[E[:, 0]] - X[E[:, 1]]
     else:
         # in the target file's axes: R_ij below only tilts the normal and cannot turn edges about it
+        scale = abs(np.linalg.det(tps.affine_[1:])) ** (1.0 / 3.0)
         turn = axis_turn(tps.affine_[1:])
         N_src = vertex_normals(V_src, F_src) @ turn
         edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]]) @ turn
@@ -213,25 +206,39 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
     n_edge_src /= np.maximum(np.linalg.norm(n_edge_src, axis=1, keepdims=True), 1e-12)
     in_face = np.zeros(n, dtype=bool)
     in_face[F_src.ravel()] = True
-
     _, lface, lbary, _ = closest_points(P, V_src, F_src)
     B = sp.csr_matrix((lbary.ravel(), (np.repeat(np.arange(len(P)), 3), F_src[lface].ravel())), shape=(len(P), n))
+    return E, D, DtD, edge_src, n_edge_src, in_face, B
 
+
+def _target_terms(tgt, V_tgt, F_tgt):
+    """Fill ``tgt`` (once; shared by the coarse and the fine solve) with the target's vertex
+    normals, vertices in a face, parts, nearest-vertex trees, boundary and vertex areas."""
+    if tgt:
+        return tgt
     nt = len(V_tgt)
-    if not tgt:  # target-side setup, shared by the coarse and the fine solve
-        tgt["N"] = vertex_normals(V_tgt, F_tgt)
-        tgt["in_face"] = np.zeros(nt, dtype=bool)
-        tgt["in_face"][F_tgt.ravel()] = True
-        tgt["part"] = mesh_parts(nt, F_tgt)
-        tgt["trees"] = _PartTrees(V_tgt, tgt["in_face"], tgt["part"])
-        tgt["bnd"] = boundary_vertices(nt, F_tgt)
-        tgt["btrees"] = _PartTrees(V_tgt, tgt["bnd"], tgt["part"]) if tgt["bnd"].any() else None
-        tgt["area"] = vertex_areas(V_tgt, F_tgt)
+    tgt["N"] = vertex_normals(V_tgt, F_tgt)
+    tgt["in_face"] = np.zeros(nt, dtype=bool)
+    tgt["in_face"][F_tgt.ravel()] = True
+    tgt["part"] = mesh_parts(nt, F_tgt)
+    tgt["trees"] = _PartTrees(V_tgt, tgt["in_face"], tgt["part"])
+    tgt["bnd"] = boundary_vertices(nt, F_tgt)
+    tgt["btrees"] = _PartTrees(V_tgt, tgt["bnd"], tgt["part"]) if tgt["bnd"].any() else None
+    tgt["area"] = vertex_areas(V_tgt, F_tgt)
+    return tgt
+
+
+def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark_weight, boundary_weight, max_angle,
+         restrict_parts, exact, edge_reference, symmetric_weight, tgt):
+    """Staged least squares of :func:`fit_surface` from ``X0`` (default: the TPS warp); returns X, labels, seconds."""
+    t1 = time.perf_counter()
+    n = len(V_src)
+    X = tps.transform(V_src)
+    E, D, DtD, edge_src, n_edge_src, in_face, B = _source_terms(V_src, F_src, X, tps, P, edge_reference)
+    nt = len(V_tgt)
+    tgt = _target_terms(tgt, V_tgt, F_tgt)
     N_tgt, tgt_in_face, tgt_part, trees = tgt["N"], tgt["in_face"], tgt["part"], tgt["trees"]
     cos_max = np.cos(np.radians(max_angle))
-    face_labels = tgt_part[F_tgt[:, 0]]
-    FN_tgt = np.cross(V_tgt[F_tgt[:, 1]] - V_tgt[F_tgt[:, 0]], V_tgt[F_tgt[:, 2]] - V_tgt[F_tgt[:, 0]])
-    FN_tgt /= np.maximum(np.linalg.norm(FN_tgt, axis=1, keepdims=True), 1e-300)
 
     if restrict_parts:
         src_part = mesh_parts(n, F_src)
@@ -254,43 +261,67 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
     BtQ = landmark_weight * (B.T @ Q)
     t2 = time.perf_counter()
 
+    reverse = None
     if symmetric_weight > 0:
-        area_t = tgt["area"]
-        area_s = np.maximum(vertex_areas(X, F_src), 1e-300)
         tlab = tgt_part if restrict_parts else np.full(nt, -1, dtype=np.int64)
         sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
         tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
+        if len(sidx) and len(tq):
+            reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), tlab, sidx, tq)
     if X0 is not None:
         X = X0.copy()
+    match = _Matcher(V_tgt, F_tgt, tgt, labels, in_face, bidx, btrees, cos_max, exact, symmetric_weight, reverse)
     # --- staged least squares
     for lam in stages:
         solve = factor_spd(W + lam * DtD + BtB)
         for _ in range(iterations):
             N = vertex_normals(X, F_src)
-            if exact:
-                C, fc, _, _ = closest_points(X, V_tgt, F_tgt, labels, face_labels)
-                nj = FN_tgt[fc]
-            else:
-                j = trees.query(X, labels)
-                nj = N_tgt[j]
-                C = X - np.einsum("ij,ij->i", X - V_tgt[j], nj)[:, None] * nj      # point-to-plane
-            dist = np.linalg.norm(C - X, axis=1)
-            bad = (np.einsum("ij,ij->i", N, nj) < cos_max) | (dist > 5.0 * np.median(dist[in_face]) + 1e-12)
-            C[bad] = X[bad]
-            if len(bidx):
-                C[bidx] = V_tgt[btrees.query(X[bidx], labels[bidx])]
-            C[~in_face] = X[~in_face]
-            if symmetric_weight > 0 and len(sidx) and len(tq):
-                has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tlab, tq, area_t, trees.big, cos_max)
-                has[bidx] = False
-                r = symmetric_weight * np.minimum(a[has] / area_s[has], 4.0)[:, None]
-                C[has] = (C[has] + r * M[has]) / (1.0 + r)
+            C = match(X, N)
             n_edge = N[E[:, 0]] + N[E[:, 1]]
             n_edge /= np.maximum(np.linalg.norm(n_edge, axis=1, keepdims=True), 1e-12)
             rhs = w[:, None] * C + lam * (D.T @ rotate_between(n_edge_src, n_edge, edge_src)) + BtQ
             X = solve(rhs)
     t3 = time.perf_counter()
     return X, labels, (t2 - t1, t3 - t2)
+
+
+class _Matcher:
+    """The data term's targets ``C`` (n, 3) for the current fit ``X`` (n, 3) with normals ``N``:
+    closest target points (point-to-plane at the nearest vertex, or exact), rejected matches
+    held in place, boundary vertices pulled to the target boundary, and the reverse term
+    folded in (see the module doc)."""
+
+    def __init__(self, V_tgt, F_tgt, tgt, labels, in_face, bidx, btrees, cos_max, exact, symmetric_weight, reverse):
+        self.V_tgt, self.F_tgt, self.tgt, self.labels, self.in_face = V_tgt, F_tgt, tgt, labels, in_face
+        self.bidx, self.btrees, self.cos_max, self.exact = bidx, btrees, cos_max, exact
+        self.symmetric_weight, self.reverse = symmetric_weight, reverse
+        self.face_labels = tgt["part"][F_tgt[:, 0]]
+        FN = np.cross(V_tgt[F_tgt[:, 1]] - V_tgt[F_tgt[:, 0]], V_tgt[F_tgt[:, 2]] - V_tgt[F_tgt[:, 0]])
+        self.FN_tgt = FN / np.maximum(np.linalg.norm(FN, axis=1, keepdims=True), 1e-300)
+
+    def __call__(self, X, N):
+        V_tgt, labels, in_face, bidx, tgt = self.V_tgt, self.labels, self.in_face, self.bidx, self.tgt
+        if self.exact:
+            C, fc, _, _ = closest_points(X, V_tgt, self.F_tgt, labels, self.face_labels)
+            nj = self.FN_tgt[fc]
+        else:
+            j = tgt["trees"].query(X, labels)
+            nj = tgt["N"][j]
+            C = X - np.einsum("ij,ij->i", X - V_tgt[j], nj)[:, None] * nj      # point-to-plane
+        dist = np.linalg.norm(C - X, axis=1)
+        bad = (np.einsum("ij,ij->i", N, nj) < self.cos_max) | (dist > 5.0 * np.median(dist[in_face]) + 1e-12)
+        C[bad] = X[bad]
+        if len(bidx):
+            C[bidx] = V_tgt[self.btrees.query(X[bidx], labels[bidx])]
+        C[~in_face] = X[~in_face]
+        if self.reverse is not None:
+            area_s, tlab, sidx, tq = self.reverse
+            has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, tgt["N"], tlab, tq, tgt["area"],
+                                         tgt["trees"].big, self.cos_max)
+            has[bidx] = False
+            r = self.symmetric_weight * np.minimum(a[has] / area_s[has], 4.0)[:, None]
+            C[has] = (C[has] + r * M[has]) / (1.0 + r)
+        return C
 
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
@@ -300,14 +331,10 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
 
     Parameters
     ----------
-    V_src : (n, 3) float
-        Source vertices, source frame and units.
-    F_src : (m, 3) int
-        Source triangles.
-    V_tgt : (n_t, 3) float
-        Target vertices, target frame and units.
-    F_tgt : (m_t, 3) int
-        Target triangles.
+    V_src, F_src : (n, 3) float, (m, 3) int
+        Source vertices (source frame and units) and triangles.
+    V_tgt, F_tgt : (n_t, 3) float, (m_t, 3) int
+        Target vertices (target frame and units) and triangles.
     lm_src, lm_tgt : dict of str -> (3,) float, or (k, 3) float
         Landmarks on the source and on the target, each in its mesh's frame
         (dicts are paired by name; arrays row by row). At least 4, not
@@ -317,33 +344,27 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
     iterations : int
         Closest-point updates per stage.
     landmark_weight, boundary_weight : float
-        ``nu`` and ``mu`` relative to a data weight of 1 per vertex. The
-        landmark weight defaults to 30: at 1 the generic rig's own landmarks
-        land 7.0% of the eye-corner distance (ex-ex) off ICT identity002's
-        published landmarks on average (14% worst), at 30 1.75% (4.2% worst),
-        and the ICT correspondence benchmark improves (27 landmarks: mean/p95
-        0.18/0.79 -> 0.13/0.46 %; 10 landmarks 0.33/1.99 -> 0.28/1.44;
-        remeshed targets 0.63/1.75 -> 0.57/1.53).
+        ``nu`` and ``mu`` relative to a data weight of 1 per vertex. A strong
+        landmark term (30) holds the landmarks far better than 1 and helps
+        the whole fit (see benchmarks/README.md, correspondence).
     max_angle : float
         Degrees; matches whose normals differ more are rejected.
     restrict_parts : bool
         Match each source part only to its voted target part (see module doc).
     exact : bool
         Exact closest points (libigl AABB) in every iteration instead of
-        point-to-plane at the nearest target vertex; 2x slower, no more
-        accurate on ICT.
+        point-to-plane at the nearest target vertex (slower, no more accurate
+        in benchmarks/correspondence.py).
     edge_reference : {"source", "tps"}
         Reference edge vectors of the shape term: the source's own edges
-        times the landmark scale (default; more accurate on ICT), or the
-        TPS-warped edges (keeps an anisotropic or sheared landmark warp).
+        times the landmark scale (default), or the TPS-warped edges (keeps
+        an anisotropic or sheared landmark warp).
     symmetric_weight : float
         Weight of the reverse (target -> source) distance term relative to the
-        forward one, for a source vertex receiving its own area of target
-        surface; 0 turns it off.
+        forward one, for a source vertex receiving its own area; 0: off.
     coarse_vertices : int or None
-        Vertex count of the decimated source for the coarse solve (see module
-        doc); None or 0, or a source of at most 1.5 times as many vertices,
-        solves at full resolution only.
+        Vertex count of the decimated source for the coarse solve (module doc);
+        None, 0 or a source of at most 1.5 times as many: full resolution only.
     fine_stages, fine_iterations
         ``stages`` and ``iterations`` of the full-resolution solve after the
         coarse one.
@@ -363,40 +384,54 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
     Raises
     ------
     AutobonesError
-        Bad meshes or landmarks (see :class:`autobones.tps.ThinPlateSpline`).
+        Bad meshes or landmarks (see :class:`autobones.geometry.tps.ThinPlateSpline`).
     """
     t0 = time.perf_counter()
     V_src, F_src = mesh_arrays(V_src, F_src, "source mesh")
     V_tgt, F_tgt = mesh_arrays(V_tgt, F_tgt, "target mesh")
-    if isinstance(lm_src, dict) or isinstance(lm_tgt, dict):
-        if not (isinstance(lm_src, dict) and isinstance(lm_tgt, dict)):
-            raise AutobonesError("give both landmark sets as dicts {name: [x, y, z]} or both as (k, 3) arrays")
-        _, P, Q = landmark_arrays(lm_src, lm_tgt)
-    else:
-        P, Q = as_points(lm_src, "source landmarks"), as_points(lm_tgt, "target landmarks")
+    P, Q = _landmark_pairs(lm_src, lm_tgt)
     if not len(stages) or min(stages) <= 0 or iterations < 1 or not len(fine_stages) or min(fine_stages) <= 0 \
             or fine_iterations < 1:
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
     if edge_reference not in ("source", "tps"):
         raise AutobonesError(f"edge_reference must be 'source' or 'tps', got {edge_reference!r}")
     tps = ThinPlateSpline().fit(P, Q)
-    X_tps = tps.transform(V_src)
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight, {})
-    n = len(V_src)
-    X0, t_setup, t_fit = None, 0.0, 0.0
-    if coarse_vertices and n > 1.5 * coarse_vertices:
-        Vc, Fc = _decimate(V_src, F_src, coarse_vertices)
-        Xc, _, (ts, tf) = _fit(Vc, Fc, V_tgt, F_tgt, P, Q, tps, None, stages, iterations, *args)
-        X0 = X_tps + _interpolate(Vc, Fc, Xc - tps.transform(Vc), V_src, F_src)
-        t_setup, t_fit = ts, tf
-        stages, iterations = fine_stages, fine_iterations
-    X, labels, (ts, tf) = _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, *args)
-    t_setup, t_fit = t_setup + ts, t_fit + tf
+    X, labels, t_setup, t_fit = _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices,
+                                                (stages, iterations), (fine_stages, fine_iterations), args)
     if timings is not None:
         timings.update(tps=t1 - t0, setup=t_setup, fit=t_fit)
     log.debug("fit_surface: tps %.3fs setup %.3fs fit %.3fs", t1 - t0, t_setup, t_fit)
     return X, labels
+
+
+def _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices, schedule, fine_schedule, args):
+    """:func:`_fit` on the source decimated to ``coarse_vertices`` with ``schedule`` (stages,
+    iterations), its displacements from the TPS carried to every source vertex, then at full
+    resolution with ``fine_schedule``; a small source is fitted at full resolution with
+    ``schedule`` only. Returns X (n, 3), labels (n,), setup and fit seconds."""
+    X_tps = tps.transform(V_src)
+    X0, t_setup, t_fit = None, 0.0, 0.0
+    stages, iterations = schedule
+    if coarse_vertices and len(V_src) > 1.5 * coarse_vertices:
+        Vc, Fc = _decimate(V_src, F_src, coarse_vertices)
+        Xc, _, (ts, tf) = _fit(Vc, Fc, V_tgt, F_tgt, P, Q, tps, None, stages, iterations, *args)
+        X0 = X_tps + _interpolate(Vc, Fc, Xc - tps.transform(Vc), V_src, F_src)
+        t_setup, t_fit = ts, tf
+        stages, iterations = fine_schedule
+    X, labels, (ts, tf) = _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, *args)
+    return X, labels, t_setup + ts, t_fit + tf
+
+
+def _landmark_pairs(lm_src, lm_tgt):
+    """Source and target landmarks as row-paired (k, 3) arrays (dicts paired by name)."""
+    if isinstance(lm_src, dict) or isinstance(lm_tgt, dict):
+        if not (isinstance(lm_src, dict) and isinstance(lm_tgt, dict)):
+            raise AutobonesError("give both landmark sets as dicts {name: [x, y, z]} or both as (k, 3) arrays")
+        _, P, Q = landmark_arrays(lm_src, lm_tgt)
+        return P, Q
+    return as_points(lm_src, "source landmarks"), as_points(lm_tgt, "target landmarks")
 
 
 def dense_correspondence(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, timings=None, **kwargs):
@@ -420,7 +455,7 @@ def dense_correspondence(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, timings=Non
     bary : (n, 3) float64
         Barycentric coordinates in that face.
     reliable : (n,) bool
-        False where :func:`autobones.stick.stick` detected a fold.
+        False where :func:`autobones.rig_transfer.stick.stick` detected a fold.
     """
     X, labels = fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, timings=timings, **kwargs)
     t0 = time.perf_counter()

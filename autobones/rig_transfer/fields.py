@@ -1,16 +1,22 @@
 """Carry per-vertex attribute fields from a source surface onto a target mesh.
 
-Seed 004 §3.5: once the generic surface is stuck onto the target (a dense
+Orvalho, Zacur & Susin 2008, §3.5: once the generic surface is stuck onto the target (a dense
 correspondence), each target vertex takes the field at its closest point on
 the stuck generic surface, by barycentric interpolation; label fields take the
 label of the dominant vertex of that triangle.
 
-Beyond 004: where that match is unreliable (the target vertex is far from the
+Beyond Orvalho et al.: where that match is unreliable (the target vertex is far from the
 stuck surface, its normal disagrees with it, or the generic vertex there was
 marked as folded) copying would spread garbage, so the field is filled in
 smoothly from the reliable neighbours instead: harmonic inpainting, the
 Laplace equation on the target mesh with the reliable values as boundary
 conditions (as in weight inpainting for skin transfer, Abdrashitov et al. 2023).
+
+Vector fields (displacements, normals, directions) are not plain numbers: a
+displacement copied as such points the wrong way on a head that lies on its side
+or is rotated locally. They are turned into the target's frame by the local
+rotation of the correspondence at each match (:func:`local_frames`), and
+displacements are also scaled by its local scale, before any inpainting.
 """
 from __future__ import annotations
 
@@ -43,6 +49,56 @@ def sample_fields(V_src, F_src, P):
     """
     C, face, bary = closest_points(P, V_src, F_src)[:3]
     return face, bary, np.linalg.norm(C - P, axis=1)
+
+
+def local_frames(V_rest, V_stuck, F, face):
+    """Rotation and scale of the correspondence at matched source triangles.
+
+    For each source triangle ``face[i]``, the linear map ``J`` taking its rest edges and unit
+    normal ``[e1 e2 n]`` to its stuck edges and unit normal ``[e1' e2' n']`` (the triangle's
+    deformation gradient, extended along the normal) is split by polar decomposition:
+    ``R`` is the rotation nearest to ``J`` (so a shear or an anisotropic stretch of the
+    triangle does not tilt vectors, and no choice of tangent edge biases it) and the scale
+    is ``sqrt(area' / area)``. A rigid motion with uniform scale ``s`` of the whole source
+    gives exactly that rotation and ``s`` at every triangle. Degenerate (zero-area) triangles
+    give the identity and scale 1.
+
+    Parameters
+    ----------
+    V_rest : (n, 3) float
+        Source vertices in the source's own frame and units.
+    V_stuck : (n, 3) float
+        The same vertices placed on the target (target frame and units).
+    F : (m, 3) int
+        Source triangles.
+    face : (k,) int
+        Triangles to evaluate.
+
+    Returns
+    -------
+    R : (k, 3, 3) float
+        Rotations (det +1), source frame -> target frame: ``v_target = R @ v_source``.
+    scale : (k,) float
+        Target length per source length.
+    """
+    def frame(V):
+        T = V[F[face]]
+        e1, e2 = T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]
+        n = np.cross(e1, e2)
+        area = np.linalg.norm(n, axis=1)
+        return np.stack([e1, e2, n / np.maximum(area, 1e-300)[:, None]], axis=2), area
+
+    A, area_rest = frame(np.asarray(V_rest, dtype=np.float64))
+    B, area_stuck = frame(np.asarray(V_stuck, dtype=np.float64))
+    ok = (area_rest > 1e-12 * max(area_rest.max(initial=0.0), 1e-300)) & (area_stuck > 0)
+    eye = np.broadcast_to(np.eye(3), A.shape)
+    J = np.where(ok[:, None, None], B, eye) @ np.linalg.inv(np.where(ok[:, None, None], A, eye))
+    U, _, Vt = np.linalg.svd(J)
+    flip = np.linalg.det(U @ Vt) < 0           # nearest proper rotation
+    U[flip, :, 2] *= -1.0
+    R = U @ Vt
+    scale = np.where(ok, np.sqrt(area_stuck / np.where(ok, area_rest, 1.0)), 1.0)
+    return R, scale
 
 
 def inpaint(V, F, values, known):
@@ -122,7 +178,7 @@ def _reaches_known(L, u, k):
 
 
 def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, max_distance=0.02,
-                    max_angle=60.0):
+                    max_angle=60.0, vectors=(), directions=(), V_rest=None):
     """Fields on the stuck source surface -> fields on the target vertices.
 
     Parameters
@@ -146,6 +202,13 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     max_angle : float
         Degrees; a target vertex whose normal differs more from the stuck
         surface's is unreliable.
+    vectors, directions : sequence of str
+        Names of (n, 3) float fields that are vectors in the source frame: each
+        interpolated vector is turned by the correspondence's local rotation at the
+        match (:func:`local_frames`); ``vectors`` (displacements, in source units) are
+        also multiplied by its local scale, ``directions`` (normals, unit directions) are not.
+    V_rest : (n, 3) float
+        Source vertices in the source's own frame; needed with ``vectors`` or ``directions``.
 
     Returns
     -------
@@ -167,6 +230,7 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     dominant = corners[np.arange(len(face)), np.argmax(bary, axis=1)]
     if source_reliable is not None:  # the source vertex that dominates the match must be trusted
         reliable &= np.asarray(source_reliable, dtype=bool)[dominant]
+    turn = _vector_turns(V_rest, V_stuck, F_src, face, fields, vectors, directions)
     # every field becomes columns of one matrix, so one factorisation inpaints them all
     columns, layout = [], []
     for name, field in fields.items():
@@ -178,6 +242,8 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
             layout.append((name, "labels", field.dtype, classes, lab))
         else:
             vals = np.einsum("ki,ki...->k...", bary, field[corners].astype(np.float64))
+            if name in turn:  # into the target frame before inpainting, which mixes neighbours
+                vals = np.einsum("kij,kj->ki", turn[name], vals)
             columns.append(vals.reshape(len(face), -1))
             layout.append((name, "values", field.dtype, field.shape[1:], None))
     filled = inpaint(V_tgt, F_tgt, np.concatenate(columns, axis=1), reliable) if columns else None
@@ -192,17 +258,41 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     return out, reliable
 
 
-def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, target_landmarks, **fit_options):
+def _vector_turns(V_rest, V_stuck, F_src, face, fields, vectors, directions):
+    """{field name: (k, 3, 3) matrix applied to its interpolated vectors} for ``vectors`` and ``directions``."""
+    names = list(vectors) + list(directions)
+    if not names:
+        return {}
+    for name in names:
+        if name not in fields:
+            raise AutobonesError(f"vector field {name!r} is not among the fields ({', '.join(fields) or 'none'})")
+        f = np.asarray(fields[name])
+        if f.ndim != 2 or f.shape[1] != 3 or not np.issubdtype(f.dtype, np.floating):
+            raise AutobonesError(f"vector field {name!r} must be (n, 3) floats, got {f.shape} {f.dtype}")
+    if V_rest is None:
+        raise AutobonesError("vector fields need the source's rest vertices (V_rest)")
+    R, scale = local_frames(V_rest, V_stuck, F_src, face)
+    return {name: R * scale[:, None, None] if name in vectors else R for name in names}
+
+
+def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, target_landmarks, vectors=(),
+                        directions=(), **fit_options):
     """Transfer per-vertex fields from one landmarked mesh to another.
 
     Parameters
     ----------
-    source_mesh, target_mesh : (V, F) pairs or mesh file paths
-        Each in its own frame and units.
+    source_mesh, target_mesh : path, (V, F) pair or mesh object
+        Each in its own frame and units (see :func:`autobones.io.mesh.resolve_mesh`).
     fields : dict of str -> (n_src,) or (n_src, k) array
         Per source vertex; integer arrays are labels.
     source_landmarks, target_landmarks : dict of str -> (3,) or landmark file paths
         Paired by name (at least 10 shared names recommended).
+    vectors : sequence of str
+        (n_src, 3) float fields that are displacements in the source's frame and units:
+        they arrive in the target's frame and units, turned and scaled by the
+        correspondence's local rotation and scale (:func:`local_frames`).
+    directions : sequence of str
+        (n_src, 3) float fields that are directions (normals): turned, not scaled.
 
     Returns
     -------
@@ -210,7 +300,7 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     """
     from .correspondence import dense_correspondence
     from ..io.landmarks import resolve_landmarks
-    from ..placement.pipeline import resolve_mesh
+    from ..io.mesh import resolve_mesh
 
     Vs, Fs, _ = resolve_mesh(source_mesh)
     Vt, Ft, _ = resolve_mesh(target_mesh)
@@ -218,5 +308,6 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
         if len(f) != len(Vs):
             raise AutobonesError(f"field {name!r} has {len(f)} rows; the source mesh has {len(Vs)} vertices")
     P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, resolve_landmarks(source_landmarks)[0], resolve_landmarks(target_landmarks)[0], **fit_options)
-    out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok)
+    out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok, vectors=vectors, directions=directions,
+                             V_rest=Vs)
     return out

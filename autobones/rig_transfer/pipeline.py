@@ -1,38 +1,44 @@
-"""``transfer``: a labelled generic rig carried onto a landmarked head (seed 004 §3.7).
+"""``transfer``: a labelled generic rig carried onto a landmarked head.
 
-The pipeline, one module a stage:
+After Orvalho, Zacur & Susin 2008 ("Transferring the Rig and Animations from a Character to
+Different Face Models", §3.7 for the whole method); one module a stage:
+
 1. landmarks (io.landmarks): read, checked against the head (names, units,
-   left/right, distance to the surface);
-2. warp + stick (tps, fit, stick): the generic skin is warped onto the head by
-   thin-plate splines from the shared landmarks, fitted to the surface and
-   stuck to it: every generic vertex gets its point on the head (a dense
-   correspondence);
-3. under-skin points (tps): a second TPS, fitted on a well-spread subsample of
-   that correspondence, carries the skeleton and the muscle origins (004 §3.4);
+   left/right, distance to the surface), or found automatically (landmarks.detect);
+2. correspondence (correspondence, stick): the generic skin is warped onto the head by
+   thin-plate splines from the shared landmarks, fitted to the surface and stuck to it:
+   every generic vertex gets its point on the head (a dense correspondence);
+3. under-skin points (under_skin): a second TPS, fitted on a well-spread subsample of
+   that correspondence, carries the skeleton and the muscle origins (their §3.4);
    muscle insertions ride the correspondence itself;
-4. attributes (attributes): skin weights, region labels and every other
-   field land on the head's own vertices, with unreliable matches inpainted;
-5. the result is a :class:`autobones.rig.Rig`, saved as the same skinned
-   glTF as ``place`` with muscles and fields in the sidecars.
+4. attributes (fields, eyes): skin weights, region labels and every other field land on
+   the head's own vertices, with unreliable matches inpainted; eyeballs follow the eye bones;
+5. the result is a :class:`autobones.rig.Rig`, saved as the same skinned glTF as ``place``
+   with muscles and fields in the sidecars.
+
+Frames: the generic rig's data are in its own frame and units, everything returned in
+the head's input frame and units.
 """
 from __future__ import annotations
 
+import functools
 import logging
 import os
 
 import numpy as np
 
-from .fields import transfer_fields
-from ..errors import AutobonesError
 from .correspondence import dense_correspondence
+from .eyes import bind_eyeballs, centre_eye_bones
+from .fields import transfer_fields
+from .under_skin import carry_muscles, under_skin_warp
+from ..errors import AutobonesError
+from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
+from ..io.mesh import resolve_mesh
 from ..orient import detect_frame, frame_from_landmarks
-from .labelled_rig import _jsonable
-from ..placement.pipeline import resolve_mesh
+from ..geometry.weights import prune_weights
 from ..rig import Rig
 from ..timing import Stopwatch
-from ..geometry.tps import ThinPlateSpline
-from ..placement.skin_weights import prune_weights
 
 log = logging.getLogger("autobones")
 
@@ -43,61 +49,56 @@ def load_generic(rig=None):
     """A LabelledRig from a folder (None: the built-in generic rig) or as given."""
     from ..generic_rig import default_rig_path
 
-    from .labelled_rig import LabelledRig
+    from ..labelled_rig import LabelledRig
 
     if rig is None or isinstance(rig, (str, os.PathLike)):
         return LabelledRig.load(default_rig_path() if rig is None else rig)
     return rig
 
 
-def spread_subsample(P, count):
-    """Indices of ``count`` well-spread points of ``P`` (greedy farthest-point order from
-    the point nearest the centroid; deterministic)."""
-    count = min(count, len(P))
-    chosen = np.empty(count, dtype=np.int64)
-    chosen[0] = int(np.argmin(((P - P.mean(axis=0)) ** 2).sum(axis=1)))
-    d = ((P - P[chosen[0]]) ** 2).sum(axis=1)
-    for i in range(1, count):
-        chosen[i] = int(np.argmax(d))
-        d = np.minimum(d, ((P - P[chosen[i]]) ** 2).sum(axis=1))
-    return chosen
+def detect_generic_landmarks(generic):
+    """Automatic landmarks of a generic rig's own skin, or None when it shows no face the detector knows.
+
+    Parameters
+    ----------
+    generic : LabelledRig
+
+    Returns
+    -------
+    dict str -> (3,) float or None
+        In the generic rig's frame and units.
+    """
+    from ..landmarks.detect import LandmarkDetector, NoFaceError
+
+    try:
+        return dict(LandmarkDetector().detect(generic.vertices, generic.faces, what="the generic rig"))
+    except NoFaceError:
+        return None
 
 
-_DETECTED = {}
+@functools.lru_cache(maxsize=4)
+def _detect_in_folder(folder, mesh_mtime_ns):
+    # a pure function of the folder's skin: the file's time stamp is part of the key, so an
+    # edited rig is detected again; the result is only read (copied into ``src`` by name)
+    from ..labelled_rig import LabelledRig
+
+    return detect_generic_landmarks(LabelledRig.load(folder))
 
 
 def generic_detected_landmarks(generic, rig=None):
-    """Automatic landmarks of the generic rig's own skin, or None when its skin shows no face
-    the detector knows. Cached: per rig folder (and its mesh's time stamp) across calls, on
-    the object itself for a LabelledRig given directly."""
-    from ..landmarks.detect import LandmarkDetector, NoFaceError
+    """:func:`detect_generic_landmarks` of the generic rig ``rig`` names (already loaded as ``generic``).
 
-    def detect():
-        try:
-            return dict(LandmarkDetector().detect(generic.vertices, generic.faces, what="the generic rig"))
-        except NoFaceError:
-            return None
-
+    For a rig folder (``rig`` None: the built-in one, or a path) the result is memoised per
+    folder and ``mesh.obj`` time stamp (``functools.lru_cache`` of the last 4 folders), so a
+    batch of automatic-landmark transfers detects on the generic skin once per worker; a
+    :class:`LabelledRig` object is detected each call (nothing is stored on it).
+    """
     if rig is None or isinstance(rig, (str, os.PathLike)):
         from ..generic_rig import default_rig_path
 
         folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
-        key = (folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
-        if key not in _DETECTED:
-            _DETECTED[key] = detect()
-        return _DETECTED[key]
-    if not hasattr(generic, "_detected_landmarks"):
-        generic._detected_landmarks = detect()
-    return generic._detected_landmarks
-
-
-def ride(points, V_src, F_src, P):
-    """Points on the source surface moved with the correspondence ``P`` (n_src, 3): each is
-    expressed in barycentric coordinates of its closest source triangle."""
-    from ..geometry.closest import closest_points
-
-    _, face, bary = closest_points(np.asarray(points, dtype=np.float64), V_src, F_src)[:3]
-    return np.einsum("ki,kij->kj", bary, P[F_src[face]])
+        return _detect_in_folder(folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
+    return detect_generic_landmarks(generic)
 
 
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, **fit_options):
@@ -105,15 +106,16 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
 
     Parameters
     ----------
-    head : str, (V, F) or None
-        The head mesh, any frame and unit (None: the built-in default head).
+    head : str, (V, F), mesh object or None
+        The head mesh, any frame and unit: a file, arrays, an object with ``vertices`` and
+        ``faces`` (``trimesh.Trimesh``), or None for the built-in default head.
     landmarks : str, dict of str -> (3,), or None
         A landmark file (contract JSON, MeshLab .pp, iBUG-68 .json/.pts/.ljson)
         or a dict, in the head's own frame; at least 10 names shared with the rig.
-        None: found automatically on a human head (:mod:`autobones.detect`; needs the
+        None: found automatically on a human head (:mod:`autobones.landmarks.detect`; needs the
         ``landmarks`` extra); the rig's ``options['landmarks_source']`` says which.
     rig : str, LabelledRig or None
-        The generic rig (a folder written by ``build_rig``); None: the built-in one.
+        The generic rig (a folder written by ``build_rig``); None: the built-in one. Not modified.
     up, front : str or None
         Override the detected axes (used to check left/right of the landmarks).
     control_points : int
@@ -134,6 +136,59 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     V, F, source = resolve_mesh(head)
     generic = load_generic(rig)
     lap("load")
+    lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
+    lap("landmarks")
+    src = {n: generic.landmarks[n] for n in shared}
+    if detected is not None:
+        # the same detector on the generic skin: its biases (brows, eye corners) then cancel
+        # instead of pulling the correspondence
+        mirror = generic_detected_landmarks(generic, rig)
+        if mirror is not None and all(n in mirror for n in shared):
+            src = {n: mirror[n] for n in shared}
+        lap("generic_landmarks")
+    dst = {n: lm[n] for n in shared}
+    fit_timings = {}
+    P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
+                                       **fit_options)
+    timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
+    if details is not None:
+        details.update(correspondence=P, reliable=ok)
+    lap("correspond")
+
+    under = under_skin_warp(generic.vertices, P, ok, control_points)
+    skeleton = generic.skeleton.transformed(under.transform)
+    muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
+    lap("skeleton")
+
+    fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
+    lap("attributes")
+
+    labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
+    facial_mask = labels == 0
+    if "region" in fields and "region" in generic.labels and "neck" in generic.labels["region"]:
+        facial_mask &= fields["region"] != generic.labels["region"].index("neck")
+    options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
+               "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
+               "detected" if detected is not None else "given",
+               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"}
+    return Rig(
+        vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
+        frame=frame, options=options, timings=timings, fields=fields,
+        source=source, muscles=jsonable(muscles), landmarks={n: lm[n] for n in lm},
+        **({} if detected is None else {"landmark_confidence": detected.confidence,
+                                        "landmarks_dropped": detected.dropped,
+                                        "landmarks_flagged": detected.flagged}),
+        field_labels={k: list(v) for k, v in generic.labels.items()},
+        reliable_fraction=float(reliable.mean()))
+
+
+def _head_landmarks(V, F, source, landmarks, generic, up, front):
+    """The head's landmarks and frame: read and validated, or detected when ``landmarks`` is None.
+
+    Returns ``lm`` (dict str -> (3,) float64, input frame), ``frame`` (orient.Frame),
+    ``detected`` (the detector's result, or None for given landmarks) and ``shared`` (the
+    contract names in both ``lm`` and the generic rig, contract order).
+    """
     detected = None
     if landmarks is None:
         from ..landmarks.detect import LandmarkDetector
@@ -155,147 +210,19 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         raise AutobonesError(
             f"{where}: only {len(shared)} landmark names are shared with the generic rig "
             f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} well-spread ones are needed")
-    lap("landmarks")
-    src = {n: generic.landmarks[n] for n in shared}
-    if detected is not None:
-        # the same detector on the generic skin: its biases (brows, eye corners) then cancel
-        # instead of pulling the correspondence (ICT pairs: 0.38% vs 0.56% mean error)
-        mirror = generic_detected_landmarks(generic, rig)
-        if mirror is not None and all(n in mirror for n in shared):
-            src = {n: mirror[n] for n in shared}
-        lap("generic_landmarks")
-    dst = {n: lm[n] for n in shared}
-    fit_timings = {}
-    P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
-                                       **fit_options)
-    timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
-    if details is not None:
-        details.update(correspondence=P, reliable=ok)
-    lap("correspond")
+    return lm, frame, detected, shared
 
-    good = np.flatnonzero(ok) if ok.sum() >= 20 else np.arange(len(P))
-    idx = good[spread_subsample(generic.vertices[good], control_points)]
-    under = ThinPlateSpline(regularization=1e-3).fit(generic.vertices[idx], P[idx])
-    skeleton = generic.skeleton.transformed(under.transform)
-    muscles = []
-    for m in generic.muscles:
-        m = dict(m)
-        m["origin"] = under.transform(np.asarray(m["origin"], dtype=np.float64)[None])[0]
-        m["insertion"] = ride(np.asarray(m["insertion"], dtype=np.float64)[None], generic.vertices,
-                              generic.faces, P)[0]
-        muscles.append(m)
-    lap("skeleton")
 
+def _carry_attributes(generic, P, ok, V, F, skeleton, under):
+    """Skin weights and fields of the generic rig on the head's vertices, eyeballs bound.
+
+    ``P`` (n_rig, 3) and ``ok`` (n_rig,) bool are the correspondence; returns ``fields``
+    (dict, one row per head vertex), ``W`` (n, b) pruned weights summing to 1, the skeleton
+    with eye bones centred in modelled eyeballs, and ``reliable`` (n,) bool (copied, not inpainted).
+    """
     fields = {"__weights__": generic.weights, **generic.fields}
     out, reliable = transfer_fields(P, generic.faces, fields, V, F, source_reliable=ok)
     W = np.clip(out.pop("__weights__"), 0.0, None)
     W = prune_weights(W / np.maximum(W.sum(axis=1, keepdims=True), 1e-300))  # inpainting leaves faint tails
     W, eyeballs = bind_eyeballs(V, F, W, skeleton, generic, under)
-    skeleton = centre_eye_bones(V, skeleton, eyeballs)
-    lap("attributes")
-
-    labels = out["depth_group"].astype(np.int8) if "depth_group" in out else np.zeros(len(V), np.int8)
-    facial_mask = labels == 0
-    if "region" in out and "region" in generic.labels and "neck" in generic.labels["region"]:
-        facial_mask &= out["region"] != generic.labels["region"].index("neck")
-    options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
-               "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
-               "detected" if detected is not None else "given",
-               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"}
-    return Rig(
-        vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
-        frame=frame, options=options, timings=timings,
-        extra={"source": source, "muscles": _jsonable(muscles),
-               "landmarks": {n: lm[n].tolist() for n in lm},
-               **({} if detected is None else {"landmark_confidence": detected.confidence,
-                                               "landmarks_dropped": detected.dropped,
-                                               "landmarks_flagged": detected.flagged}),
-               "field_labels": {k: list(v) for k, v in generic.labels.items()},
-               "reliable_fraction": float(reliable.mean())},
-        fields=out)
-
-
-def bind_eyeballs(V, F, W, skeleton, generic, under):
-    """Separate parts sitting on an eye bone (eyeballs, corneas) follow it rigidly.
-
-    A generic skin has no eyeballs to carry weights for, and on the target they
-    would take the eyelids' weights from the closest skin. A part counts as an
-    eyeball when its centroid is within 0.35 eye-fissure lengths of the eye bone's
-    pivot and it is no wider than 1.5 fissures (eyelashes and lids sit farther out).
-    Returns the weights and ``{eye bone name: (n,) bool}`` of the vertices bound.
-    """
-    from ..geometry.topology import mesh_parts
-
-    names = skeleton.names
-    bound = {}
-    if not all(n in generic.landmarks for n in ("exocanthion_l", "endocanthion_l")):
-        return W, bound
-    ex, en = under.transform(np.array([generic.landmarks["exocanthion_l"], generic.landmarks["endocanthion_l"]]))
-    fissure = np.linalg.norm(ex - en)
-    part = mesh_parts(len(V), F)
-    if part.max() == 0:
-        return W, bound
-    count = np.bincount(part)
-    centroid = np.stack([np.bincount(part, weights=V[:, j]) for j in range(3)], axis=1) / count[:, None]
-    W = W.copy()
-    for eye in ("eye_l", "eye_r"):
-        if eye not in names:
-            continue
-        pivot = skeleton.heads[names.index(eye)]
-        for p in np.flatnonzero(np.linalg.norm(centroid - pivot, axis=1) < 0.35 * fissure):
-            members = part == p
-            if np.ptp(V[members], axis=0).max() < 1.5 * fissure and members.sum() < 0.5 * len(V):
-                W[members] = 0.0
-                W[members, names.index(eye)] = 1.0
-                bound[eye] = bound.get(eye, np.zeros(len(V), dtype=bool)) | members
-    return W, bound
-
-
-def centre_eye_bones(V, skeleton, eyeballs, max_residual=0.1):
-    """Move each eye bone to the centre of the eyeball it carries, when the head has one.
-
-    The warped pivot can sit several millimetres off a modelled eyeball's centre (ICT:
-    0.06-0.08 face units), and gaze and the lid joints turn about it: the eyeball would
-    swing through the lids. A least-squares sphere through the bound vertices is trusted
-    when their median distance to it is under ``max_residual`` of its radius (a cornea
-    bulge or an iris disc stays within that; a non-spherical part is left alone).
-
-    Parameters
-    ----------
-    V : (n, 3) float
-        Head vertices.
-    skeleton : Skeleton
-        Bones in the head's frame and units; not modified.
-    eyeballs : dict str -> (n,) bool
-        Vertices bound rigidly to each eye bone (from :func:`bind_eyeballs`).
-
-    Returns
-    -------
-    Skeleton
-        A copy with each such eye bone (head and tail) translated to its sphere's centre.
-    """
-    from ..skeleton import Skeleton
-
-    heads, tails = skeleton.heads.copy(), skeleton.tails.copy()
-    for eye, members in eyeballs.items():
-        P = V[members]
-        if len(P) < 10:
-            continue
-        centre, radius = fit_sphere(P)
-        if not radius > 0 or np.median(np.abs(np.linalg.norm(P - centre, axis=1) - radius)) > max_residual * radius:
-            continue
-        j = skeleton.names.index(eye)
-        shift = centre - heads[j]
-        heads[j] += shift
-        tails[j] += shift
-    return Skeleton(list(skeleton.names), skeleton.parents.copy(), heads, tails)
-
-
-def fit_sphere(P):
-    """Algebraic least-squares sphere through points P (m, 3): (centre (3,), radius)."""
-    c0 = P.mean(axis=0)
-    Q = P - c0                                   # centred, for conditioning
-    A = np.c_[2.0 * Q, np.ones(len(Q))]
-    x = np.linalg.lstsq(A, (Q * Q).sum(axis=1), rcond=None)[0]
-    r2 = x[3] + x[:3] @ x[:3]
-    return c0 + x[:3], float(np.sqrt(r2)) if r2 > 0 else 0.0
+    return out, W, centre_eye_bones(V, skeleton, eyeballs), reliable

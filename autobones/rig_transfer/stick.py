@@ -1,10 +1,10 @@
 """Stick (STK): project a warped source mesh onto the target surface.
 
-Seed 004 §3.3, equation 4: every vertex of the (TPS-warped) source goes to the
+Orvalho, Zacur & Susin 2008, §3.3, equation 4: every vertex of the (TPS-warped) source goes to the
 closest point of the target surface, which gives a dense correspondence
 ``source vertex i -> (target face, barycentric coordinates)``.
 
-Seed 004 notes that sticking "can present undesirable folds in areas with high
+Orvalho et al. note that sticking "can present undesirable folds in areas with high
 curvature or if the distance between origin and target points is large" and
 leaves them undetected; here each vertex also gets a reliability flag, false
 where
@@ -16,7 +16,7 @@ where
   (its area shrinks below ``min_area_ratio`` of the warped area) by sticking.
 
 Optional part labels restrict which target faces a vertex may land on (used by
-:mod:`autobones.fit` to keep eyeballs on eyeballs). Closest points come from
+:mod:`autobones.rig_transfer.correspondence` to keep eyeballs on eyeballs). Closest points come from
 libigl's AABB tree; nothing is ``O(n^2)``.
 """
 from __future__ import annotations
@@ -36,7 +36,7 @@ def stick(V_src, F_src, V_tgt, F_tgt, max_angle=60.0, min_area_ratio=0.01, label
     ----------
     V_src : (n, 3) float
         Source vertices already warped into the target's frame and units
-        (e.g. by :class:`autobones.tps.ThinPlateSpline`).
+        (e.g. by :class:`autobones.geometry.tps.ThinPlateSpline`).
     F_src : (m_s, 3) int
         Source triangles (for normals and fold detection).
     V_tgt : (n_t, 3) float

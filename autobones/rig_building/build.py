@@ -1,11 +1,12 @@
 """Build a labelled rig (skeleton, skin weights, regions, muscles) on any landmarked head.
 
-Seed 004 §2 describes the generic rig's layers (skin, 44 landmarks, skeleton,
+Orvalho, Zacur & Susin 2008, §2 describe the generic rig's layers (skin, 44 landmarks, skeleton,
 muscles, attributes) but not how they were made: an artist modelled them. Here
 every layer is a rule on the contract landmarks (``spec/landmarks.md``), so the
 same definitions work on the default head and on any other landmarked head.
-Muscles follow seed 001 §5 (linear muscles with width and falloff) and seed 000
-§4.2 (a joint from an origin under the skin to an insertion on the skin).
+Muscles follow Lee, Terzopoulos & Waters 1995, §5 (linear muscles with width and
+falloff) and Bibliowicz 2005, §4.2 (a joint from an origin under the skin to an
+insertion on the skin).
 
 Everything is computed in the head's canonical frame (:func:`autobones.orient.detect_frame`:
 +Y up, +Z front, +X subject's left, head sizes) and returned in the input frame
@@ -56,12 +57,12 @@ Regions (field ``region``, classes in :data:`REGIONS`), first rule that holds wi
     cheeks   in front of the ears (z > tragion + 0.3 cm), between the mouth/jaw and the eyes
     neck     below the neck plane (0.8 cm under the menton to the skull base behind)
     scalp    everything else
-``depth_group``: face / middle / back of :func:`autobones.segment.segment_head`.
+``depth_group``: face / middle / back of :func:`autobones.placement.segment.segment_head`.
 ``face_half``: upper / lower of the mouth plane (stomion, gonions).
 
 Muscles: see ``generic_rig/muscles.json`` (``units`` there): origin and
 insertion are landmark combinations, insertion snapped to the skin, origin
-snapped then pushed inward by its depth; field ``muscle/<name>`` is 001's force
+snapped then pushed inward by its depth; field ``muscle/<name>`` is Lee et al.'s force
 profile: sin(pi/2 e^kappa) along the muscle (fading out within 25% past the
 insertion) times 0.5 (cos(pi (w / width)^falloff) + 1) across it.
 """
@@ -78,7 +79,7 @@ from ..geometry.laplacian import diffuse, laplacian
 from ..geometry.smooth import step
 from ..geometry.topology import mesh_parts
 from ..skeleton import Skeleton
-from .labelled_rig import LabelledRig
+from ..labelled_rig import LabelledRig
 
 log = logging.getLogger(__name__)
 
@@ -168,7 +169,7 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     if missing:
         raise AutobonesError(
             f"build_rig: {len(missing)} landmark(s) missing: {', '.join(missing)}; the skeleton, "
-            f"regions and muscles need {len(need)} contract names (autobones.build_rig.required_landmarks())")
+            f"regions and muscles need {len(need)} contract names (autobones.rig_transfer.build.required_landmarks())")
     if frame is None:
         frame = detect_frame(V, F)
     Vc = frame.to_canonical(V)
@@ -182,6 +183,39 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     def wn(P):
         return igl.fast_winding_number(Vq, Fi, np.ascontiguousarray(np.atleast_2d(P), dtype=np.float64))
 
+    skel_c, jaw0, eyes = _skeleton(Vc, L, cm, wn)
+    W, jaw, below_mouth = _skin_weights(Vc, F, L, cm, jaw0, eyes)
+
+    # --- regions -----------------------------------------------------------------------------
+    from ..placement.segment import segment_head
+
+    region = _regions(Vc, L, cm, jaw, below_mouth, jaw0)
+    seg = segment_head(Vc, F)
+    face_half = (below_mouth > 0).astype(np.int8)
+
+    fields = {"skin_weights": W, "jaw_weight": jaw, "region": region,
+              "depth_group": seg.labels.astype(np.int8), "face_half": face_half}
+    out_muscles = _place_muscles(muscles, L, Vc, F, fu, cm, wn, frame, fields)
+
+    skel = skel_c.transformed(frame.from_canonical)
+    return LabelledRig(
+        vertices=V, faces=F, landmarks={k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()},
+        skeleton=skel, weights=W, fields=fields,
+        labels={"region": list(REGIONS), "depth_group": list(DEPTH_GROUPS), "face_half": list(FACE_HALVES)},
+        muscles=out_muscles,
+        units="input mesh units",
+        frame="input mesh frame; canonical frame (+Y up, +Z front, +X subject's left, head sizes) in info",
+        info={"canonical_frame": frame.to_dict(), "face_unit": fu * frame.size,
+              "bones": "neck -> head -> {jaw, eye_l, eye_r}; eye bones rotate eyeballs only",
+              "seeds": "004 §2 (layers), 001 §5 (muscles), 000 §4.2 (muscle joints)"})
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers (canonical frame)
+
+
+def _skeleton(Vc, L, cm, wn):
+    """Canonical-frame skeleton (module doc): (Skeleton, jaw pivot (3,), {side: (eye centre, eye tail)})."""
     # --- skeleton --------------------------------------------------------------------------
     tr = 0.5 * (L["tragion_l"] + L["tragion_r"])
     head0 = tr + np.array([0.0, -2.0 * cm, -0.5 * cm])
@@ -207,7 +241,12 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     heads = np.array([joints["neck0"], joints["head0"], joints["jaw0"], eyes["l"][0], eyes["r"][0]])
     tails = np.array([joints["head0"], joints["head1"], joints["jaw1"], eyes["l"][1], eyes["r"][1]])
     skel_c = Skeleton(list(BONES), [-1, 0, 1, 1, 1], heads, tails)
+    return skel_c, jaw0, eyes
 
+
+def _skin_weights(Vc, F, L, cm, jaw0, eyes):
+    """Skin weights (n, 5) in :data:`BONES` order (module doc), the jaw weight (n,) and the signed
+    distance below the mouth plane (n,), canonical frame."""
     # --- jaw weight --------------------------------------------------------------------------
     go_l, go_r = L["gonion_l"], L["gonion_r"]
     up_n = _plane_normal(L["stomion"], go_l, go_r, toward=np.array([0.0, -1.0, 0.0]))
@@ -244,17 +283,12 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     W = np.column_stack([neck_w * rest, (1.0 - neck_w) * rest, jaw, eye_w["l"], eye_w["r"]])
     W = np.clip(W, 0.0, None)
     W /= W.sum(axis=1, keepdims=True)
+    return W, jaw, below_mouth
 
-    # --- regions -----------------------------------------------------------------------------
-    from ..placement.segment import segment_head
 
-    region = _regions(Vc, L, cm, jaw, below_mouth, jaw0)
-    seg = segment_head(Vc, F)
-    face_half = (below_mouth > 0).astype(np.int8)
-
-    # --- muscles -----------------------------------------------------------------------------
-    fields = {"skin_weights": W, "jaw_weight": jaw, "region": region,
-              "depth_group": seg.labels.astype(np.int8), "face_half": face_half}
+def _place_muscles(muscles, L, Vc, F, fu, cm, wn, frame, fields):
+    """Muscles of the definitions on the head, in the input frame (``width`` in mesh units);
+    adds each one's influence (n,) to ``fields`` as ``muscle/<name>``."""
     out_muscles = []
     for m in muscles:
         mm, infl = _muscle(m, L, Vc, F, fu, cm, wn)
@@ -264,22 +298,8 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
         mm["width"] = mm["width_canonical"] * frame.size
         mm["origin_depth_length"] = mm["origin_depth_canonical"] * frame.size
         out_muscles.append(mm)
+    return out_muscles
 
-    skel = skel_c.transformed(frame.from_canonical)
-    return LabelledRig(
-        vertices=V, faces=F, landmarks={k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()},
-        skeleton=skel, weights=W, fields=fields,
-        labels={"region": list(REGIONS), "depth_group": list(DEPTH_GROUPS), "face_half": list(FACE_HALVES)},
-        muscles=out_muscles,
-        units="input mesh units",
-        frame="input mesh frame; canonical frame (+Y up, +Z front, +X subject's left, head sizes) in info",
-        info={"canonical_frame": frame.to_dict(), "face_unit": fu * frame.size,
-              "bones": "neck -> head -> {jaw, eye_l, eye_r}; eye bones rotate eyeballs only",
-              "seeds": "004 §2 (layers), 001 §5 (muscles), 000 §4.2 (muscle joints)"})
-
-
-# ---------------------------------------------------------------------------------------------
-# helpers (canonical frame)
 
 
 def _check_sides(L):
@@ -409,7 +429,7 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
         cand = [o_skin - depth * n, o_skin + depth * n]
         w = wn(np.array(cand))
         origin = cand[int(np.argmax(w))]
-    # influence: seed 001's length and width ratios
+    # influence: Lee, Terzopoulos & Waters 1995's length and width ratios
     axis = ins - origin
     length = np.linalg.norm(axis)
     u = axis / length

@@ -1,9 +1,9 @@
 """The labelled generic rig: skin, landmarks, skeleton, skin weights, attribute fields, muscles.
 
-Seed 004 §2: the generic rig R is a skin surface R_S with landmarks (lambda),
+Orvalho, Zacur & Susin 2008, §2: the generic rig R is a skin surface R_S with landmarks (lambda),
 a skeleton R_B, muscles R_M and per-layer attributes ("weight, texture,
 muscle stress, etc."). :class:`LabelledRig` holds those layers as plain arrays
-so that the transfer (004 §3) can carry every field to another head, and users
+so that the transfer (their §3) can carry every field to another head, and users
 can add their own (``rig.fields["my_field"] = array``, one row per vertex).
 
 On disk a rig is a folder:
@@ -32,8 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import AutobonesError
-from ..skeleton import Skeleton
+from .errors import AutobonesError
+from .io.jsonable import jsonable
+from .io.obj import read_obj, write_obj
+from .skeleton import Skeleton
 
 FORMAT = "autobones-labelled-rig/1"
 FILES = ("rig.json", "mesh.obj", "fields.npz")
@@ -128,10 +130,10 @@ class LabelledRig:
             "face_count": int(len(self.faces)),
             "landmarks": {k: [float(c) for c in v] for k, v in self.landmarks.items()},
             "skeleton": self.skeleton.to_list(),
-            "muscles": [_jsonable(m) for m in self.muscles],
+            "muscles": [jsonable(m) for m in self.muscles],
             "labels": {k: list(v) for k, v in self.labels.items()},
             "fields": fields,
-            "info": _jsonable(self.info),
+            "info": jsonable(self.info),
         }
 
     def save(self, folder):
@@ -153,7 +155,7 @@ class LabelledRig:
             with open(os.path.join(tmp, "rig.json"), "w", encoding="utf-8") as fh:
                 json.dump(self.to_json(), fh, indent=1)
                 fh.write("\n")
-            _write_obj(os.path.join(tmp, "mesh.obj"), self.vertices, self.faces)
+            write_obj(os.path.join(tmp, "mesh.obj"), self.vertices, self.faces, comment="autobones labelled rig skin")
             arrays = {"weights": _stored(self.weights)}
             for name, value in self.fields.items():
                 arrays["field:" + name] = _stored(np.asarray(value))
@@ -193,7 +195,7 @@ class LabelledRig:
             got = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
             raise AutobonesError(f"{path}: format {got!r} is not {FORMAT!r}; not a labelled rig")
         try:
-            V, F = _read_obj(os.path.join(folder, "mesh.obj"))
+            V, F = _read_skin(os.path.join(folder, "mesh.obj"))
             with np.load(os.path.join(folder, "fields.npz"), allow_pickle=False) as z:
                 arrays = {k: z[k] for k in z.files}
         except AutobonesError:
@@ -244,37 +246,10 @@ def _stored(a):
     return a
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
-
-
-def _write_obj(path, V, F):
-    with open(path, "w", encoding="ascii") as fh:
-        fh.write("# autobones labelled rig skin\n")
-        # shortest round-trip repr: reading gives back the same float64 bits
-        fh.write("".join(f"v {float(a)!r} {float(b)!r} {float(c)!r}\n" for a, b, c in np.asarray(V).tolist()))
-        np.savetxt(fh, np.asarray(F) + 1, fmt="f %d %d %d")
-
-
-def _read_obj(path):
-    V, F = [], []
-    with open(path, encoding="ascii", errors="strict") as fh:
-        for line in fh:
-            if line.startswith("v "):
-                V.append([float(c) for c in line.split()[1:4]])
-            elif line.startswith("f "):
-                F.append([int(c.split("/")[0]) - 1 for c in line.split()[1:4]])
-    V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
-    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
-    if len(V) == 0 or len(F) == 0:
+def _read_skin(path):
+    """mesh.obj of a rig folder: (V (n, 3) float64, F (m, 3) int64), both non-empty and consistent."""
+    V, F = read_obj(path)
+    if len(F) == 0:
         raise AutobonesError(f"{path}: no vertices or faces")
     if F.min() < 0 or F.max() >= len(V):
         raise AutobonesError(f"{path}: face index out of range")

@@ -1,0 +1,184 @@
+"""The per-file job of a batch: its options, its output names, and :func:`rig_one`."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import socket
+import time
+import traceback
+
+from ..errors import AutobonesError
+
+PARTIAL_SUFFIX = ".partial"
+
+#: Landmark files looked for beside ``NAME.ext`` in transfer mode, first found wins.
+LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
+
+
+# ---------------------------------------------------------------------------------------------
+# options and naming
+
+def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False):
+    """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
+
+    ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
+    options mean the same thing on every worker. ``expressions`` (transfer only: True or
+    ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
+    when set, so other batches keep their options hash.
+    """
+    from ..placement.facial_bones import DENSITIES, bone_count
+
+    if transfer:
+        return {"mode": "transfer", "density": None,
+                "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
+                **({"expressions": expressions} if expressions else {})}
+    if expressions:
+        raise AutobonesError("--expressions needs muscles, which place does not make; add --transfer")
+    if rig is not None:
+        raise AutobonesError("--rig is only used with --transfer")
+    n = bone_count(density)  # refuse a bad density once, before any file is touched
+    named = isinstance(density, str) and density.strip().lower() in DENSITIES
+    d = density.strip().lower() if named else n
+    return {"mode": "place", "density": d, "rig": None, "random_state": int(random_state)}
+
+
+def options_hash(options):
+    """sha256 (16 hex digits) of the options and the autobones version: what makes outputs comparable."""
+    from ..version import __version__
+
+    text = json.dumps({"options": options, "autobones_version": __version__}, sort_keys=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def output_paths(glb_path):
+    """``x.glb`` -> (``x.glb``, ``x.rig.json``, ``x.weights.npz``), as :meth:`Rig.save` names them."""
+    from ..rig import sidecar_paths
+
+    return (os.fspath(glb_path), *sidecar_paths(glb_path))
+
+
+def landmarks_for(mesh_path):
+    """The landmark file beside ``DIR/NAME.ext`` (``NAME.landmarks.json``, ``.pp``, ``.pts``,
+    ``.ljson``; the first that exists), or None."""
+    stem = os.path.splitext(os.fspath(mesh_path))[0]
+    for suffix in LANDMARK_SUFFIXES:
+        if os.path.isfile(stem + suffix):
+            return stem + suffix
+    return None
+
+
+def partial_dir(glb_path):
+    """The hidden folder ``DIR/.NAME.glb.partial`` a job saves into before renaming its outputs."""
+    folder, name = os.path.split(os.fspath(glb_path))
+    return os.path.join(folder, f".{name}{PARTIAL_SUFFIX}")
+
+
+def one_line(text, limit=500):
+    """``text`` with its whitespace runs made single spaces, cut to ``limit`` characters."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+# ---------------------------------------------------------------------------------------------
+# the per-file job
+
+def rig_one(input_path, output_path, options):
+    """Rig one mesh and write its glb and sidecars atomically; never raises for a bad file.
+
+    Parameters
+    ----------
+    input_path : str
+        Mesh file (absolute, so workers elsewhere read the same file).
+    output_path : str
+        Target ``.glb``; the sidecars go beside it. Parent folders are created.
+    options : dict
+        From :func:`make_options`: ``mode`` ('place' or 'transfer'), ``density``,
+        ``rig``, ``random_state``. In transfer mode the landmarks are the file
+        :func:`landmarks_for` finds beside the mesh.
+
+    Returns
+    -------
+    dict
+        ``input``, ``output``, ``status`` ('ok' or 'failed'), ``error`` (one line,
+        None when ok), ``error_type``, ``seconds``, ``timings`` (per stage),
+        ``vertices``, ``bones``, ``options_hash``, ``landmarks``, ``host``, ``pid``;
+        ``traceback`` for an unexpected exception (a bug, not a bad file).
+
+    The result depends only on the arguments and the files' contents: BLAS runs on
+    one thread in every engine so a rig is the same bit for bit wherever it is made.
+    """
+    t0 = time.perf_counter()
+    h = options_hash(options)
+    record = {"input": input_path, "output": output_path, "status": "failed", "error": None,
+              "error_type": None, "seconds": 0.0, "timings": {}, "vertices": None, "bones": None,
+              "options_hash": h, "landmarks": None, "host": socket.gethostname(), "pid": os.getpid()}
+    partial = partial_dir(output_path)
+    try:
+        with _one_blas_thread():
+            rig = _make_rig(input_path, options, record)
+        rig.batch = {"options": options, "options_hash": h}
+        _save_atomically(rig, output_path, partial, options.get("expressions", False))
+        record.update(status="ok", timings={k: round(float(v), 4) for k, v in rig.timings.items()},
+                      vertices=int(len(rig.vertices)), bones=int(len(rig.skeleton)))
+    except AutobonesError as exc:
+        record.update(error=one_line(str(exc)), error_type="AutobonesError")
+    except Exception as exc:  # a batch never dies on one file: record the bug and go on
+        record.update(error=one_line(f"{type(exc).__name__}: {exc}"), error_type=type(exc).__name__,
+                      traceback=traceback.format_exc())
+    finally:
+        if os.path.isdir(partial):
+            shutil.rmtree(partial, ignore_errors=True)
+    record["seconds"] = round(time.perf_counter() - t0, 4)
+    return record
+
+
+def _make_rig(input_path, options, record):
+    import autobones
+
+    mode = options.get("mode")
+    if mode == "place":
+        return autobones.place(input_path, density=options["density"], random_state=options["random_state"])
+    if mode == "transfer":
+        # a mesh without a landmark file beside it gets automatic landmarks (human faces)
+        lm = landmarks_for(input_path)
+        record["landmarks"] = lm if lm is not None else "detected"
+        return autobones.transfer(input_path, lm, rig=options.get("rig"))
+    raise AutobonesError(f"unknown batch mode {mode!r}; use 'place' or 'transfer'")
+
+
+class _one_blas_thread:
+    def __enter__(self):
+        try:
+            from threadpoolctl import threadpool_limits
+        except ImportError:  # without it, the engines' own settings apply
+            self._limits = None
+        else:
+            self._limits = threadpool_limits(limits=1)
+        return self
+
+    def __exit__(self, *exc):
+        if self._limits is not None:
+            self._limits.restore_original_limits()
+        return False
+
+
+def _save_atomically(rig, output_path, partial, expressions=False):
+    """Save into ``partial``, then rename glb, npz and last the sidecar (the commit mark) into place."""
+    folder = os.path.dirname(os.path.abspath(output_path))
+    try:
+        os.makedirs(folder, exist_ok=True)
+        if os.path.isdir(partial):
+            shutil.rmtree(partial)
+        os.mkdir(partial)
+    except OSError as exc:
+        raise AutobonesError(f"{output_path}: cannot create the output folder ({exc.strerror or exc})") from exc
+    staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions)
+    glb, js, npz = output_paths(output_path)
+    try:
+        for src, dst in ((staged[0], glb), (staged[2], npz), (staged[1], js)):
+            os.replace(src, dst)
+        os.rmdir(partial)
+    except OSError as exc:
+        raise AutobonesError(f"{output_path}: cannot write ({exc.strerror or exc})") from exc

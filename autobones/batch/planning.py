@@ -1,0 +1,145 @@
+"""Planning a batch: the meshes under the input folder and, for each, run, skip (up to date) or fail (refused)."""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+
+from ..errors import AutobonesError
+from ..io.mesh import SUPPORTED
+from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir
+
+
+@dataclass
+class Item:
+    """One mesh of the batch: what to do with it and, when skipped or refused, why."""
+
+    input: str           # absolute
+    rel: str             # relative to the input folder, '/' separated
+    output: str          # absolute .glb
+    action: str = "run"  # run | skip | fail
+    reason: str | None = None
+    record: dict = field(default_factory=dict)
+
+
+def check_folders(input_dir, output_dir):
+    """Absolute (input, output) folders; refuse a missing input or overlapping folders."""
+    inp = os.path.realpath(os.fspath(input_dir))
+    out = os.path.realpath(os.fspath(output_dir))
+    if not os.path.isdir(inp):
+        raise AutobonesError(f"{input_dir}: no such folder")
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise AutobonesError(f"{output_dir}: exists and is not a folder")
+    if out == inp:
+        raise AutobonesError(f"{output_dir}: the output folder is the input folder; outputs are never "
+                             f"written inside the input, choose another folder")
+    if out.startswith(inp + os.sep):
+        raise AutobonesError(f"{output_dir}: the output folder is inside the input folder {input_dir}; "
+                             f"outputs are never written inside the input, choose a folder outside it")
+    if inp.startswith(out + os.sep):
+        raise AutobonesError(f"{input_dir}: the input folder is inside the output folder {output_dir}; "
+                             f"its outputs would land inside the input, choose separate folders")
+    return inp, out
+
+
+def find_meshes(input_dir, output_dir=None):
+    """Mesh files under ``input_dir``, recursively, sorted by relative path.
+
+    Only :data:`autobones.io.mesh.SUPPORTED` extensions; hidden files and folders
+    (a leading dot) and ``output_dir`` (should it sit inside) are left out; symbolic
+    links to folders are not followed.
+    """
+    inp = os.path.realpath(os.fspath(input_dir))
+    skip = os.path.realpath(os.fspath(output_dir)) if output_dir is not None else None
+    found = []
+    for root, dirs, files in os.walk(inp):
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".")
+                         and os.path.realpath(os.path.join(root, d)) != skip)
+        for name in sorted(files):
+            if name.startswith(".") or os.path.splitext(name)[1].lower() not in SUPPORTED:
+                continue
+            path = os.path.join(root, name)
+            if os.path.isfile(path):
+                found.append(path)
+    return sorted(found, key=lambda p: os.path.relpath(p, inp).replace(os.sep, "/"))
+
+
+def plan(input_dir, output_dir, options, force=False):
+    """One :class:`Item` per mesh, with ``action`` run, skip (up to date) or fail (refused).
+
+    Refused: two inputs that would write the same output (``a.obj`` and ``a.ply``),
+    and, without ``force``, outputs that exist but are older than the input or were
+    made with other options.
+    """
+    inp, out = check_folders(input_dir, output_dir)
+    h = options_hash(options)
+    items = []
+    for path in find_meshes(inp, out):
+        rel = os.path.relpath(path, inp)
+        glb = os.path.join(out, os.path.splitext(rel)[0] + ".glb")
+        items.append(Item(input=path, rel=rel.replace(os.sep, "/"), output=glb))
+    owners = {}
+    for it in items:
+        for target in output_paths(it.output):
+            owners.setdefault(target.lower(), []).append(it)
+    for it in items:
+        clash = sorted({o.rel for target in output_paths(it.output) for o in owners[target.lower()]} - {it.rel})
+        if clash:
+            it.action, it.reason = "fail", (f"{it.rel}: {', '.join(clash)} would write the same output "
+                                            f"{os.path.relpath(it.output, out)}; rename one of them")
+    for it in items:
+        if it.action == "run":
+            it.action, it.reason = _state(it, options, h, force)
+    return items
+
+
+def _state(it, options, h, force):
+    targets = output_paths(it.output)
+    present = [os.path.exists(t) for t in targets]
+    if os.path.isdir(partial_dir(it.output)):
+        return "run", "interrupted"
+    if not any(present):
+        return "run", None
+    why = None
+    if not all(present):
+        why = "some of its outputs exist (" + ", ".join(os.path.basename(t) for t, p in zip(targets, present) if p) + ")"
+    else:
+        recorded = _recorded_hash(targets[1])
+        sources = [it.input]
+        if options.get("mode") == "transfer":
+            lm = landmarks_for(it.input)
+            sources += [lm] if lm else []
+        newest_in = max(os.stat(s).st_mtime_ns for s in sources)
+        oldest_out = min(os.stat(t).st_mtime_ns for t in targets)
+        if recorded is None:
+            why = "its outputs exist but were not written by autobones batch"
+        elif recorded != h:
+            why = "its outputs were made with other options or another autobones version"
+        elif oldest_out < newest_in:
+            why = "its outputs are older than the input"
+        else:
+            return "skip", "up to date"
+    if force:
+        return "run", f"overwritten: {why}"
+    return "fail", f"{it.rel}: {why}; pass --force to overwrite"
+
+
+def _recorded_hash(sidecar):
+    try:
+        with open(sidecar, encoding="utf-8") as fh:
+            return json.load(fh).get("batch", {}).get("options_hash")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def clean_stale_temps(out):
+    """Remove what an interrupted run left behind: Rig.save's ``.autobones-*`` temporaries and
+    a half-written report. ``.partial`` folders are kept: they mark files to redo."""
+    for root, dirs, files in os.walk(out):
+        dirs[:] = [d for d in dirs if not d.endswith(PARTIAL_SUFFIX)]
+        for name in files:
+            if name.startswith(".autobones-") or name.startswith(".batch_report-"):
+                try:
+                    os.unlink(os.path.join(root, name))
+                except OSError:
+                    pass

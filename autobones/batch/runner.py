@@ -1,0 +1,98 @@
+""":func:`run_batch`: plan the folder, run the jobs on an engine, write the report."""
+from __future__ import annotations
+
+import os
+import time
+
+from ..errors import AutobonesError
+from .engines import run_dask, run_local
+from .jobs import options_hash, rig_one
+from .planning import check_folders, clean_stale_temps, plan
+from .report import REPORT_FORMAT, REPORT_NAME, STATUSES, public_record, write_report
+
+
+def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=False,
+              on_start=None, on_result=None):
+    """Rig every mesh under ``input_dir`` into ``output_dir``; write ``batch_report.json``.
+
+    Parameters
+    ----------
+    input_dir, output_dir : str or os.PathLike
+        Folders; the output is created and may not overlap the input.
+    options : dict
+        From :func:`make_options`.
+    jobs : int
+        Worker processes of the local engine (ignored with ``scheduler``).
+    scheduler : str or None
+        Address of a Dask distributed scheduler (``tcp://host:8786``).
+    force : bool
+        Overwrite outputs that exist but are out of date or made with other options.
+    on_start : callable(n_to_run, n_skipped, n_refused), optional
+    on_result : callable(record), optional
+        Called once per file, as it finishes (skipped and refused files first).
+
+    Returns
+    -------
+    dict
+        The report (also written, atomically, to ``output_dir/batch_report.json``).
+    """
+    if int(jobs) < 1:
+        raise AutobonesError(f"--jobs {jobs}: give at least 1 worker process")
+    t0 = time.perf_counter()
+    items = plan(input_dir, output_dir, options, force=force)
+    inp, out = check_folders(input_dir, output_dir)
+    os.makedirs(out, exist_ok=True)
+    clean_stale_temps(out)
+    h = options_hash(options)
+    to_run = [it for it in items if it.action == "run"]
+    if on_start:
+        on_start(len(to_run), sum(it.action == "skip" for it in items), sum(it.action == "fail" for it in items))
+    for it in items:
+        if it.action != "run":
+            it.record = _not_run_record(it, h)
+            if on_result:
+                on_result(public_record(it.record, inp, out, options))
+
+    def done(i, record):
+        record = dict(record)
+        if to_run[i].reason:
+            record["reason"] = to_run[i].reason
+        to_run[i].record = record
+        if on_result:
+            on_result(public_record(record, inp, out, options))
+
+    argsets = [(it.input, it.output, options) for it in to_run]
+    if scheduler:
+        run_dask(scheduler, rig_one, argsets, done, paths=(inp, out))
+    else:
+        run_local(int(jobs), rig_one, argsets, done)
+    report = {
+        "format": REPORT_FORMAT,
+        "autobones_version": _version(),
+        "input": inp, "output": out,
+        "engine": "dask" if scheduler else "local",
+        "scheduler": scheduler, "jobs": None if scheduler else int(jobs),
+        "options": options, "options_hash": h, "force": bool(force),
+        "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "seconds": round(time.perf_counter() - t0, 3),
+        "counts": {s: sum(it.record.get("status") == s for it in items) for s in STATUSES},
+        "files": [public_record(it.record, inp, out, options) for it in items],
+    }
+    write_report(os.path.join(out, REPORT_NAME), report)
+    return report
+
+
+def _not_run_record(it, h):
+    """The record of a planned item that is not run: skipped (up to date) or failed (refused)."""
+    status = "skipped" if it.action == "skip" else "failed"
+    return {"input": it.input, "output": it.output, "status": status,
+            "error": it.reason if status == "failed" else None,
+            "error_type": "Refused" if status == "failed" else None,
+            "reason": it.reason if status == "skipped" else None,
+            "seconds": 0.0, "timings": {}, "options_hash": h}
+
+
+def _version():
+    from ..version import __version__
+
+    return __version__

@@ -1,0 +1,193 @@
+"""The ``autobones`` commands: each calls the library and prints one line (errors: see :mod:`.main`)."""
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+from .values import number, pairs, vector
+
+
+def cmd_place(args):
+    import autobones
+
+    if args.expressions:
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError("--expressions needs muscles, which place does not make; use "
+                             "autobones transfer HEAD --landmarks FILE --expressions -o OUT.glb")
+    head = args.head
+    out = args.output or _default_out(head)
+    t = time.perf_counter()
+    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=args.seed,
+                          landmarks=args.landmarks, rig=args.rig)
+    written = rig.save(out)
+    print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
+          f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
+          f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
+    return 0
+
+
+def _default_out(head):
+    stem = "default_head" if head is None else os.path.splitext(os.path.basename(head))[0]
+    return f"{stem}.rig.glb"
+
+
+def cmd_transfer(args):
+    import autobones
+
+    out = args.output or _default_out(args.head)
+    t = time.perf_counter()
+    rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
+    written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
+    if rig.options.get("landmarks_source") == "detected":
+        conf = rig.landmark_confidence or {}
+        dropped = rig.landmarks_dropped or []
+        print(f"landmarks: {len(conf)} found automatically, mean confidence {sum(conf.values()) / max(len(conf), 1):.2f}"
+              + (f"; dropped {', '.join(dropped)}" if dropped else "")
+              + f" (check them: autobones landmarks {args.head} --preview PNG)")
+    print(f"{written[0]}: {len(rig.skeleton)} bones, {len(rig.muscles or [])} muscles, "
+          f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
+          f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
+          f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}"
+          + (f"; {_morph_target_count(written[1])} morph targets" if args.expressions or args.expression_sides else ""))
+    return 0
+
+
+def _morph_target_count(sidecar):
+    import json
+
+    with open(sidecar, encoding="utf-8") as fh:
+        return len(json.load(fh)["expressions"]["morph_targets"])
+
+
+def cmd_pose(args):
+    import numpy as np
+
+    import autobones
+    from autobones.expressions.definitions import parse_au_key
+    from autobones.io.posed import write_posed_mesh
+
+    t = time.perf_counter()
+    au = {parse_au_key(k)[0]: v for k, v in pairs(args.au, "--au", default=1.0).items()}
+    expression = pairs(args.expression, "--expression", default=1.0)
+    muscles = pairs(args.muscle, "--muscle")
+    eyelids = pairs(args.eyelids, "--eyelids")
+    jaw = number(args.jaw, "--jaw")
+    gaze, look_at = vector(args.gaze, 2, "--gaze"), vector(args.look_at, 3, "--look-at")
+    head_deg, neck_deg = vector(args.head_deg, 3, "--head"), vector(args.neck_deg, 3, "--neck")
+    out = args.output or os.path.splitext(os.path.basename(args.rig))[0].removesuffix(".rig") + ".pose.obj"
+    if os.path.splitext(out)[1].lower() not in (".obj", ".glb"):
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
+    rig = autobones.load_rig(args.rig)
+    if not rig.muscles:
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
+                             "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
+    if args.definitions:
+        rig.expression_model(args.definitions)  # pose uses the model built last
+    V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
+                 eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
+    what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
+                     + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
+                     + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
+                     + ([f"gaze {args.gaze}"] if gaze else []) + ([f"look at {args.look_at}"] if look_at else [])
+                     + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else []))
+    write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
+    moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0
+    print(f"{out}: {what or 'neutral'}; {len(V)} vertices, largest displacement {moved:.4g} "
+          f"({moved / rig.frame.size:.1%} of the head size), {time.perf_counter() - t:.1f} s")
+    return 0
+
+
+def cmd_landmarks(args):
+    import autobones
+    from autobones.io.landmarks import read_landmarks, validate_landmarks, write_landmarks
+    from autobones.landmarks.preview import save_preview
+
+    t = time.perf_counter()
+    V, F = autobones.load_mesh(args.head)
+    if args.source:
+        frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
+        lm = validate_landmarks(read_landmarks(args.source), V, F, frame=frame, min_count=1, source=args.source)
+        confidence, how = None, f"read from {args.source}"
+    else:
+        lm = autobones.detect_landmarks((V, F), up=args.up, front=args.front, name=args.head)
+        frame, confidence = lm.frame, lm.confidence
+        how = f"found automatically, mean confidence {sum(confidence.values()) / max(len(confidence), 1):.2f}"
+        if lm.dropped:
+            how += "; dropped " + ", ".join(f"{n} ({why})" for n, why in lm.dropped.items())
+        if lm.flagged:
+            how += "; check " + ", ".join(sorted(lm.flagged))
+    out = args.output or (None if args.source and args.preview else
+                          os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
+    if args.preview:
+        save_preview(args.preview, V, F, lm, frame=frame, confidence=confidence)
+    if out:
+        write_landmarks(out, lm, mesh_name=os.path.basename(args.head),
+                        **({"confidence": confidence} if confidence is not None else {}))
+    print(f"{out or args.preview}: {len(lm)} landmarks {how}, {time.perf_counter() - t:.1f} s"
+          + (f"; preview {args.preview}" if args.preview and out else ""))
+    return 0
+
+
+def cmd_build_rig(args):
+    import autobones
+
+    t = time.perf_counter()
+    rig = autobones.build_rig(args.base, args.landmarks)
+    rig.save(args.output)
+    print(f"{args.output}: {len(rig.skeleton)} bones, {len(rig.muscles)} muscles, {len(rig.fields)} fields, "
+          f"{len(rig.landmarks)} landmarks, {len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s")
+    return 0
+
+
+def cmd_batch(args):
+    from autobones.batch import make_options, run_batch, summary_table
+
+    options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
+                           expressions="sides" if args.expression_sides else args.expressions)
+    show = not args.quiet and sys.stderr.isatty()
+    bar = None
+
+    def start(n_run, n_skip, n_refused):
+        nonlocal bar
+        import shutil
+
+        from tqdm import tqdm
+
+        size = shutil.get_terminal_size((100, 24))  # a terminal of unknown size reports 0 x 0: tqdm would hide the bar
+        bar = tqdm(total=n_run, unit="mesh", disable=not show, file=sys.stderr, ncols=min(size.columns, 120),
+                   nrows=max(size.lines, 2),
+                   desc=f"rigging ({n_skip} up to date)" if n_skip else "rigging")
+
+    def result(rec):
+        line = None
+        if rec["status"] == "failed":
+            line = f"autobones batch: {rec['error']}"
+            if args.debug and rec.get("traceback"):
+                line += "\n" + rec["traceback"].rstrip()
+        elif args.verbose and rec["status"] == "ok":
+            line = f"autobones batch: {rec['input']} -> {rec['output']} ({rec['seconds']:.1f} s)"
+        if line:
+            (bar.write if bar is not None else print)(line, file=sys.stderr)
+        if bar is not None and rec["status"] != "skipped" and not rec.get("error_type") == "Refused":
+            bar.update(1)
+
+    try:
+        report = run_batch(args.input_dir, args.output, options, jobs=args.jobs, scheduler=args.scheduler,
+                           force=args.force, on_start=start, on_result=result)
+    finally:
+        if bar is not None:
+            bar.close()
+    if not args.quiet:
+        print(summary_table(report))
+        print(f"report: {os.path.join(args.output, 'batch_report.json')}")
+    return 0 if report["counts"]["failed"] == 0 else 1
+
+
+COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
+            "build-rig": cmd_build_rig, "batch": cmd_batch}

@@ -1,0 +1,128 @@
+"""The commands' help texts: examples, outputs, units (argparse epilogs)."""
+from __future__ import annotations
+
+PLACE_EPILOG = """\
+examples:
+  autobones place                                 rig the built-in default head -> default_head.rig.glb
+  autobones place scan.obj --density dense -o scan.glb
+  autobones place scan.ply --density 24           24 facial bones
+  autobones place bust.stl --up +z --front -y     when the automatic orientation guesses wrong
+  autobones place head.obj --landmarks head.landmarks.json --density dense
+                                                  transferred neck, head, jaw and eyes + facial bones
+
+output:
+  OUT.glb          skinned glTF 2.0: the input vertices unchanged, joints neck, head,
+                   face_00..., the 4 largest weights per vertex
+  OUT.rig.json     bones (name, parent, head, tail), detected frame, per-vertex
+                   face/middle/back label, facial mask, options, version
+  OUT.weights.npz  the full weight matrix 'weights' (n_vertices x n_bones) and 'bone_names'
+
+densities: sparse = 8, medium = 16, dense = 32 facial bones, or any number 1..256.
+Inputs: OBJ, PLY, OFF, STL, glTF/GLB, in any frame and unit; +Y-up/+Z-front is not required.
+"""
+
+TRANSFER_EPILOG = """\
+examples:
+  autobones transfer head.obj --landmarks head.landmarks.json -o head.glb
+  autobones transfer scan.obj -o scan.glb                   human face: landmarks found automatically
+  autobones transfer goat.obj --landmarks goat.pp -o goat.glb            MeshLab picked points
+  autobones transfer scan.ply --landmarks scan.ibug68.json --rig my_rig/ -o scan.glb
+
+output: OUT.glb (joints neck, head, jaw, eye_l, eye_r), OUT.rig.json (bones, muscles with
+origins and insertions, landmarks used, label class names), OUT.weights.npz (weights and
+every transferred field as field/<name>).
+
+Landmark names, frame and file formats: the landmark contract (README). Bad landmarks
+(unknown names, left/right swapped, off the surface, wrong units, too few) are refused
+with one line naming the problem.
+"""
+
+LANDMARKS_EPILOG = """\
+examples:
+  autobones landmarks scan.obj -o scan.landmarks.json                   found automatically (human faces)
+  autobones landmarks scan.obj -o scan.landmarks.json --preview scan.png
+  autobones landmarks goat.obj --from goat.pp --preview goat.png        convert a file and draw it
+  autobones landmarks bust.stl --up +z --front -y -o bust.landmarks.json
+
+How: the head is turned upright, rendered on the CPU from the front and four views around it
+(+-30 deg yaw, +-15 deg pitch), MediaPipe Face Mesh finds 468 points in each picture, they are
+lifted onto the surface and combined across views; then midline names go onto the face's
+symmetry plane, left/right pairs become mirror images, the nose tip and menton are taken from
+the midline profile. A name whose views disagree is dropped, not guessed; a pair whose sides
+disagree is flagged. 27 of the contract's names are found (the ones a face picture shows).
+
+Animals, most cartoons and back-of-head scans have no face the detector knows: the command
+says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp).
+Needs the optional detector: pip install 'autobones[landmarks]'.
+
+output: the contract's JSON ({"format": "autobones-landmarks/1", "landmarks": {name: [x, y, z]}}),
+in the mesh's own frame and units, plus "confidence" per name (1 = every view agrees).
+"""
+
+BUILD_EPILOG = """\
+examples:
+  autobones build-rig base.obj --landmarks base.landmarks.json -o my_rig/
+  autobones transfer scan.obj --landmarks scan.landmarks.json --rig my_rig/ -o scan.glb
+"""
+
+BATCH_EPILOG = """\
+examples:
+  autobones batch heads/ -o rigs/ --density dense --jobs 2      place on every mesh, recursively
+  autobones batch heads/ -o rigs/ --transfer                    landmarks NAME.landmarks.json / NAME.pp beside each
+                                                                mesh; found automatically where there is none
+  autobones batch heads/ -o rigs/ --scheduler tcp://scheduler.example:8786    the same, on a Dask cluster
+
+output: OUT/<path relative to INPUT_DIR without extension>.glb, .rig.json, .weights.npz per
+mesh, and OUT/batch_report.json (per file: status ok/failed/skipped, error, timings, options).
+Meshes whose outputs are up to date (newer than the input, same options) are skipped, so an
+interrupted batch is resumed by running it again. Outputs that exist but are out of date are
+overwritten only with --force. The output folder may not overlap the input folder.
+
+exit code: 0 when every file is ok or up to date, 1 when any file failed, 2 for a bad
+command (missing folder, overlapping folders, bad option).
+"""
+
+
+def pose_epilog():
+    """The pose command's help: examples, then the AUs and emotions of the data file."""
+    import json
+
+    try:
+        from autobones.generic_rig import expressions_path
+
+        with open(expressions_path(), encoding="utf-8") as fh:
+            doc = json.load(fh)
+        aus = "\n".join(f"  AU{k:<3} {v.get('name', '')}" for k, v in sorted(doc["action_units"].items(),
+                                                                          key=lambda kv: int(kv[0])))
+        emotions = "\n".join(f"  {k:<10} " + " + ".join(f"AU{a}" + (f"*{w:g}" if w != 1 else "")
+                                                        for a, w in v["au"].items())
+                             for k, v in doc["expressions"].items())
+    except (OSError, ValueError, KeyError, TypeError, ImportError) as exc:
+        aus = emotions = f"  (generic_rig/expressions.json could not be read: {exc})"
+    return f"""\
+examples:
+  autobones pose head.glb --expression happiness -o happy.obj           an emotion preset
+  autobones pose head.glb --au 12=0.8 --au 6=0.4 --jaw 10 -o smile.obj  FACS action units, jaw in degrees
+  autobones pose head.glb --au 12L=1 -o smirk.obj                       L / R: the subject's left / right half
+  autobones pose head.glb --expression surprise=0.5 --gaze 20,0 -o look.glb
+  autobones pose head.glb --eyelids upper=1 --head 0,30,0 -o turned.obj
+
+RIG.glb is a rig saved by `autobones transfer` (its muscles drive the skin), with
+RIG.rig.json and RIG.weights.npz beside it; the sidecar keeps the expression
+definitions the rig was saved with (--definitions FILE poses with others). The posed vertices are written in the
+rig's own frame and units, vertex i of the output = vertex i of the input mesh:
+OUT.obj (v and f lines) or OUT.glb (a static mesh, no skin).
+
+units: AU and expression intensities 0..1 (1 = the AU's full action; larger values
+extrapolate, negative ones reverse); --jaw, --gaze, --head, --neck in degrees; --jaw
+adds to the opening AU26/AU27 give. --eyelids PART=V: upper/lower (both eyes) or
+upper_l, upper_r, lower_l, lower_r; upper=1 closes the eye. --head/--neck PITCH,YAW,ROLL:
+pitch > 0 nods down, yaw > 0 turns to the subject's left. --gaze YAW,PITCH: yaw > 0 to
+the subject's left, pitch > 0 up.
+
+action units (generic_rig/expressions.json):
+{aus}
+
+emotions (Erdoğdu 2010, Table 3-3):
+{emotions}
+"""

@@ -1,0 +1,171 @@
+"""The ``autobones`` argument parser: one function per command, the options they share."""
+from __future__ import annotations
+
+import argparse
+
+from .help_texts import BATCH_EPILOG, BUILD_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG, TRANSFER_EPILOG, pose_epilog
+
+
+def build_parser():
+    """The parser of ``autobones COMMAND ...`` (argparse)."""
+    parser = argparse.ArgumentParser(
+        prog="autobones",
+        description="Rig head meshes without a technical artist: bones, smooth skin weights, skinned glTF.")
+    parser.add_argument("--version", action="store_true", help="print the version and exit")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    add_place(sub)
+    add_transfer(sub)
+    add_pose(sub)
+    add_landmarks(sub)
+    add_build_rig(sub)
+    add_batch(sub)
+    return parser
+
+
+def add_place(sub):
+    """The ``place`` command's arguments."""
+    p = sub.add_parser(
+        "place", help="place head, neck and facial bones and skin weights (no landmarks needed)",
+        description="Place head, neck and facial bones on a head mesh and bind it with smooth skin "
+                    "weights (average-linkage depth groups, k-means facial bones, bone heat).",
+        epilog=PLACE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("head", nargs="?", help="head mesh file (default: the built-in default head)")
+    p.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
+    p.add_argument("--density", default="medium",
+                   help="facial bones: sparse (8), medium (16, default), dense (32) or a number")
+    _axes(p)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the k-means restarts (default 0)")
+    p.add_argument("--landmarks", help="optional landmark file: transfer the generic rig's neck, head, jaw and "
+                                      "eyes first and place the facial bones on the transferred face")
+    p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")
+    p.add_argument("--expressions", action="store_true", help=argparse.SUPPRESS)  # refused: place has no muscles
+    _common(p)
+
+
+def add_transfer(sub):
+    """The ``transfer`` command's arguments."""
+    t = sub.add_parser(
+        "transfer", help="carry the labelled generic rig onto a landmarked head",
+        description="Warp the labelled generic rig onto a head by thin-plate splines from shared landmarks, "
+                    "stick it to the surface (dense correspondence), and carry its skeleton (neck, head, jaw, "
+                    "eyes), muscles, skin weights and attribute fields onto the head's own vertices "
+                    "(Orvalho, Zacur & Susin 2008). Writes the same skinned glTF as `place`.",
+        epilog=TRANSFER_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    t.add_argument("head", help="head mesh file (OBJ, PLY, OFF, STL, glTF/GLB; any frame and unit)")
+    t.add_argument("--landmarks",
+                   help="landmark file in the head's frame: contract .json, MeshLab .pp, or an iBUG-68 "
+                        ".json/.pts/.ljson; at least 10 names shared with the rig (default: found "
+                        "automatically on a human face, see `autobones landmarks`)")
+    t.add_argument("--rig", help="generic rig folder made by `autobones build-rig` (default: the built-in one)")
+    t.add_argument("-o", "--output", help="output .glb (default: HEAD_NAME.rig.glb in the current folder)")
+    _axes(t, "; used to check left/right")
+    t.add_argument("--expressions", action="store_true",
+                   help="also write each FACS action unit as a morph target (AU1 ... AU43, intensity 1, "
+                        "computed on this head; see `autobones pose --help`)")
+    t.add_argument("--expression-sides", action="store_true",
+                   help="with the morph targets, also each AU's left and right halves (AU12L, AU12R); "
+                        "implies --expressions")
+    _common(t)
+
+
+def add_pose(sub):
+    """The ``pose`` command's arguments."""
+    q = sub.add_parser(
+        "pose", help="pose a saved transferred rig: FACS action units, emotions, jaw, eyelids, gaze",
+        description="Pose a rig saved by `autobones transfer` with its skin/muscle model (Bibliowicz 2005, "
+                    "section 4.2): FACS action units, emotion presets, muscle contractions, jaw opening, "
+                    "eyelids, eye gaze, head and neck turns. Writes the posed mesh.",
+        epilog=pose_epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    q.add_argument("rig", metavar="RIG.glb", help="a glb written by autobones transfer, its sidecars beside it")
+    q.add_argument("-o", "--output", help="posed mesh, .obj or .glb (default: RIG_NAME.pose.obj in the current folder)")
+    q.add_argument("--expression", action="append", default=[], metavar="NAME[=W]",
+                   help="an emotion preset at intensity W (default 1); repeat to mix")
+    q.add_argument("--au", action="append", default=[], metavar="N=V",
+                   help="action unit N (12, AU12, 12L, 12R) at intensity V (default 1); repeat for more")
+    q.add_argument("--muscle", action="append", default=[], metavar="NAME=V",
+                   help="a muscle (zygomaticus_major_l) or muscle type (both sides) contracted by V")
+    q.add_argument("--jaw", default="0", metavar="DEG", help="jaw opening in degrees (default 0)")
+    q.add_argument("--eyelids", action="append", default=[], metavar="PART=V",
+                   help="eyelid amount: upper, lower, upper_l, upper_r, lower_l, lower_r (upper=1 closes)")
+    q.add_argument("--gaze", metavar="YAW,PITCH", help="both eyes turned, degrees")
+    q.add_argument("--look-at", metavar="X,Y,Z", help="a point (rig frame and units) both eyes aim at")
+    q.add_argument("--head", dest="head_deg", metavar="PITCH,YAW,ROLL", help="head rotation, degrees")
+    q.add_argument("--neck", dest="neck_deg", metavar="PITCH,YAW,ROLL", help="neck rotation, degrees")
+    q.add_argument("--definitions", metavar="FILE",
+                   help="expression definitions to pose with (format of generic_rig/expressions.json) instead "
+                        "of the ones the rig's sidecar kept")
+    _common(q)
+
+
+def add_landmarks(sub):
+    """The ``landmarks`` command's arguments."""
+    m = sub.add_parser(
+        "landmarks", help="find the contract's landmarks on a human head automatically, or draw given ones",
+        description="Find the landmark contract's names on a human or human-like head automatically "
+                    "(render, detect in 2-D, lift to the surface), write them as the contract's JSON in "
+                    "the mesh's own frame, and optionally draw a picture to check them by eye.",
+        epilog=LANDMARKS_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    m.add_argument("head", help="head mesh file (OBJ, PLY, OFF, STL, glTF/GLB; any frame and unit)")
+    m.add_argument("-o", "--output", help="landmark file to write (.json); default: HEAD_NAME.landmarks.json "
+                                          "in the current folder (none with --from and only --preview)")
+    m.add_argument("--from", dest="source", metavar="FILE",
+                   help="read the landmarks from FILE (contract .json, MeshLab .pp, iBUG-68) instead of detecting")
+    m.add_argument("--preview", metavar="PNG", help="also draw a front and a side picture with every landmark named")
+    _axes(m)
+    _common(m)
+
+
+def add_build_rig(sub):
+    """The ``build-rig`` command's arguments."""
+    b = sub.add_parser(
+        "build-rig", help="build a labelled generic rig from a base head and its landmarks",
+        description="Derive a labelled generic rig (skeleton, muscles, skin weights, region labels, muscle "
+                    "influence fields) from any base head plus its landmarks, with the same code that built "
+                    "the built-in rig. Use the folder with `autobones transfer --rig`.",
+        epilog=BUILD_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("base", help="base head mesh file")
+    b.add_argument("--landmarks", required=True, help="the base head's landmark file (names the rig needs: see below)")
+    b.add_argument("-o", "--output", required=True, help="output folder (rig.json, mesh.obj, fields.npz)")
+    _common(b)
+
+
+def add_batch(sub):
+    """The ``batch`` command's arguments."""
+    a = sub.add_parser(
+        "batch", help="rig every mesh in a folder tree (local processes or a Dask cluster), resumably",
+        description="Run `place` (or `transfer`) on every mesh under INPUT_DIR, mirroring its folders in "
+                    "OUT_DIR, on N local processes or a Dask distributed cluster. Each output is written "
+                    "under a temporary name and renamed when complete; a rerun skips what is done.",
+        epilog=BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    a.add_argument("input_dir", metavar="INPUT_DIR", help="folder of meshes (OBJ, PLY, OFF, STL, glTF/GLB), "
+                                                          "searched recursively; hidden files are ignored")
+    a.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder (outside INPUT_DIR)")
+    a.add_argument("--density", default="medium",
+                   help="facial bones for place: sparse (8), medium (16, default), dense (32) or a number")
+    a.add_argument("--transfer", action="store_true",
+                   help="transfer the labelled rig instead of placing bones; uses NAME.landmarks.json "
+                        "(or NAME.pp, .pts, .ljson) beside each NAME.obj, else finds them automatically "
+                        "(human faces; needs autobones[landmarks])")
+    a.add_argument("--rig", metavar="DIR", help="generic rig folder for --transfer (default: the built-in one)")
+    a.add_argument("--expressions", action="store_true",
+                   help="with --transfer: one morph target per FACS action unit in each glb (see `autobones pose --help`)")
+    a.add_argument("--expression-sides", action="store_true",
+                   help="with --transfer: also each AU's left and right halves (AU12L, AU12R); implies --expressions")
+    a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
+    a.add_argument("--scheduler", metavar="ADDRESS",
+                   help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "
+                        "the folders must be on a file system every worker sees at the same path")
+    a.add_argument("--force", action="store_true",
+                   help="overwrite outputs that exist but are out of date or made with other options")
+    a.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary table")
+    _common(a)
+
+
+def _axes(p, note=""):
+    p.add_argument("--up", help=f"input axis that points up: +x -x +y -y +z -z (default: detected{note})")
+    p.add_argument("--front", help="input axis the face looks along (default: detected)")
+
+
+def _common(p):
+    p.add_argument("-v", "--verbose", action="count", default=0, help="report stages, timings and the detected frame")
+    p.add_argument("--debug", action="store_true", help="show tracebacks instead of one-line errors")
