@@ -1,6 +1,7 @@
 """Find a head's up, front and left-right symmetry plane; map to and from the canonical frame.
 
-Goes beyond the seeds: 003 assumes the head already stands +Y up facing +Z.
+Goes beyond the papers we implement: the bone-placement method of ``place`` assumes the head
+already stands +Y up facing +Z.
 Real heads arrive Z-up or Y-up, facing +-X or +-Z, in millimetres or metres.
 
 Method

@@ -5,8 +5,8 @@ Run by hand, not by the tests::
     python benchmarks/correspondence.py            # all 12 ordered pairs
     python benchmarks/correspondence.py --quick    # 2 pairs
 
-Goes beyond the seeds: it scores seed 004's TPS and TPS+STK (§3.1, §3.3) and
-autobones.fit (seed 000 ch. 5 global alignment) against ground truth.
+Scores the TPS and TPS+STK of Orvalho, Zacur & Susin 2008 (§3.1, §3.3) and
+autobones.rig_transfer.correspondence (the global fit of Bibliowicz 2005, ch. 5) against ground truth.
 
 Data: ``../shared/data/ict/{generic_neutral_mesh,identity000,identity001,
 identity002}.obj`` (26,719 vertices, 56 parts, one vertex list), each with a

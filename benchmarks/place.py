@@ -6,7 +6,7 @@ Run by hand, not by the tests::
     python benchmarks/place.py --quick               # 5k and 20k only (smoke check)
     python benchmarks/place.py --sizes 5000,134000 --density medium --profile /tmp/prof
 
-Goes beyond the seeds: it measures the targets of the performance issue (134k
+It measures the targets of the performance issue (134k
 vertices at ``dense`` in <= 5 s and <= 1 GB on a 2-core machine, near-linear
 growth to 500k) and prints whether each is met.
 

@@ -1,9 +1,9 @@
 """Build the generic rig on the default head: ``generic_rig/default/`` and ``gallery/generic_rig.png``.
 
-Seed 004 §2 (the generic rig's layers). Everything is regenerated from the
+The generic rig's layers of Orvalho, Zacur & Susin 2008 (§2). Everything is regenerated from the
 committed ``default_head.obj`` and ``default_head.landmarks.json`` (run
 ``place_default_landmarks.py`` first when the head changed) with
-:func:`autobones.build_rig.build_rig` and ``muscles.json``.
+:func:`autobones.rig_building.build.build_rig` and ``muscles.json``.
 
 Run ``python generic_rig/build_default_rig.py``.
 """

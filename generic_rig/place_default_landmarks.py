@@ -1,6 +1,6 @@
 """Place the 44 contract landmarks on the built-in default head.
 
-Seed 004 §2: the generic rig is tagged with 44 anthropometric landmarks (lambda)
+Orvalho, Zacur & Susin 2008 (§2): the generic rig is tagged with 44 anthropometric landmarks (lambda)
 placed on its surface. The default head is procedural, so instead of an artist
 clicking them we derive them from the committed ``default_head.obj`` with
 geometric rules, seeded by ``build_default_head.ANATOMY`` (the builder's table

@@ -1,4 +1,4 @@
-"""Automatic landmarks (autobones.detect) and landmark previews (autobones.preview).
+"""Automatic landmarks (autobones.landmarks) and landmark previews (autobones.landmarks.preview).
 
 The detector is MediaPipe, installed by the ``landmarks`` extra (tools/test-setup.sh);
 these tests fail, never skip, without it.

@@ -71,8 +71,8 @@ def test_morph_target_keys_parse_au_keys_the_same_way():
 
 
 def test_rig_inputs_reads_the_rig_and_defaults_to_empty():
-    rig = SimpleNamespace(extra={"muscles": [{"name": "m"}], "landmarks": {"stomion": [0, 0, 0]},
-                                 "field_labels": {"region": ["a"]}})
+    rig = SimpleNamespace(muscles=[{"name": "m"}], landmarks={"stomion": [0, 0, 0]},
+                          field_labels={"region": ["a"]})
     got = rig_inputs(rig)
     assert got.muscles == [{"name": "m"}] and got.landmarks == {"stomion": [0, 0, 0]}
     assert got.field_labels == {"region": ["a"]}

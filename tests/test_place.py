@@ -1,4 +1,4 @@
-"""autobones.place on real heads: where the bones land, how the skin is bound, run to run."""
+"""autobones.place (autobones.placement) on real heads: where the bones land, how the skin is bound, run to run."""
 import igl
 import numpy as np
 import pytest

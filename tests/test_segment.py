@@ -1,4 +1,4 @@
-"""autobones.segment: depth groups, the chin, head and neck bones on synthetic and real heads."""
+"""autobones.placement.segment: depth groups, the chin, head and neck bones on synthetic and real heads."""
 import numpy as np
 
 from autobones.io.mesh import load_mesh

@@ -1,4 +1,4 @@
-"""autobones.stick: closest points on the target, barycentric coordinates, fold detection."""
+"""autobones.rig_transfer.stick: closest points on the target, barycentric coordinates, fold detection."""
 import igl
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""autobones.tps: Bookstein thin-plate spline in 3-D."""
+"""autobones.geometry.tps: Bookstein thin-plate spline in 3-D."""
 import json
 
 import numpy as np

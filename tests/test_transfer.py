@@ -1,4 +1,4 @@
-"""autobones.transfer: the generic rig carried onto human, cartoon and animal heads."""
+"""autobones.transfer (autobones.rig_transfer): the generic rig carried onto human, cartoon and animal heads."""
 import json
 import os
 import subprocess

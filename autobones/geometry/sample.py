@@ -1,6 +1,6 @@
 """Deterministic, area-uniform point samples of a surface.
 
-Goes beyond the seeds: 003 clusters raw vertices, whose density follows the
+Goes beyond the bone-placement method of ``place``, which clusters raw vertices, whose density follows the
 modeller or scanner (dense eyes, sparse scalp). Clustering an area-uniform
 sample makes the result depend on the shape, not on its tessellation, and
 keeps the O(s^2) average-linkage step small whatever the vertex count.

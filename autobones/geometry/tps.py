@@ -1,8 +1,9 @@
 """Thin-plate spline warp of 3-D space from landmark pairs.
 
-Seed 004 §3.1 (equation 1) with Bookstein's algebra from seed 002 §4.4.2,
+Orvalho, Zacur & Susin 2008, §3.1 (equation 1), with Bookstein's (1989) algebra as Erdoğdu 2010
+(§4.4.2) sets it out,
 carried to three dimensions: the kernel is U(r) = r, the fundamental solution
-of the biharmonic equation in 3-D (seed 002's r² log r² is the 2-D kernel),
+of the biharmonic equation in 3-D (Erdoğdu's r² log r² is the 2-D kernel),
 plus an affine part::
 
     f(x) = a_0 + A x + sum_i w_i U(||x - p_i||)

@@ -1,10 +1,10 @@
 """Facial bones by k-means on the facial mask, at a chosen density.
 
-Seed 003 §3.2: k-means on the facial-mask vertices, initial centres from dense,
+The bone-placement method of ``place`` (its §3.2): k-means on the facial-mask vertices, initial centres from dense,
 well separated regions, the best of several runs by squared error, a bone at
 each centroid, parented to the head bone.
 
-Beyond 003: the centres are constrained to be mirror-symmetric about the
+Beyond that method: the centres are constrained to be mirror-symmetric about the
 head's symmetry plane (x = 0 in the canonical frame): each centre is either on
 the plane or one of a mirrored pair. Lloyd's update is followed by projecting
 the centres onto that constraint (a pair's centre is the weighted mean of its

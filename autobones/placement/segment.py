@@ -1,6 +1,6 @@
 """Split a head by depth into facial mask, middle and back; place the head and neck bones.
 
-Seed 003 §3.1. Average-linkage agglomerative clustering of the head along its
+The bone-placement method of ``place``, its §3.1: average-linkage agglomerative clustering of the head along its
 depth (canonical Z) into 3 groups; the middle group clustered again, along its
 height, into an upper and a lower part. The head bone runs vertically through
 the upper part's mean, the neck bone through the lower part's mean, parallel

@@ -1,6 +1,6 @@
 """Smooth skin weights by heat diffusion from the bones over the surface.
 
-Seed 003 §3.2 (end) asks for smooth skinning: every vertex influenced by
+The bone-placement method of ``place`` (end of its §3.2) asks for smooth skinning: every vertex influenced by
 several bones, weights summing to one. We use the bone-heat equilibrium of
 Baran and Popovic (Pinocchio, 2007): for each bone j solve
 

@@ -1,4 +1,4 @@
-"""autobones.facial: symmetric k-means facial bones, deterministic, best of restarts."""
+"""autobones.placement.facial_bones: symmetric k-means facial bones, deterministic, best of restarts."""
 import numpy as np
 import pytest
 

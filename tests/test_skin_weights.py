@@ -1,4 +1,4 @@
-"""autobones.weights: bone heat gives a smooth partition of unity on every kind of mesh."""
+"""autobones.placement.skin_weights: bone heat gives a smooth partition of unity on every kind of mesh."""
 import numpy as np
 import trimesh
 

@@ -1,4 +1,4 @@
-"""autobones.attributes: fields carried onto another head with another triangulation, inpainting."""
+"""autobones.rig_transfer.fields: fields carried onto another head with another triangulation, inpainting."""
 import json
 
 import fast_simplification

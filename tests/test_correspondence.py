@@ -1,4 +1,4 @@
-"""autobones.fit: the least-squares fit beats TPS+STK on a real ICT pair."""
+"""autobones.rig_transfer.correspondence: the least-squares fit beats TPS+STK on a real ICT pair."""
 import json
 
 import numpy as np
