@@ -34,7 +34,7 @@ from .io.rig_files import load_rig
 
 def build_rig(base, landmarks, **kwargs):
     """A labelled generic rig from a base head (path, (V, F) or mesh object) and its landmarks (path or dict);
-    see :func:`autobones.rig_transfer.build.build_rig`."""
+    see :func:`autobones.rig_building.build.build_rig`."""
     from .rig_building.build import build_rig as _build
     from .io.landmarks import resolve_landmarks
     from .io.mesh import resolve_mesh

@@ -259,7 +259,7 @@ class Rig:
         expressions : bool, "sides" or sequence of AU keys
             Also write FACS action units as glTF morph targets (``AU12``..., each the
             displacement at intensity 1 from the neutral mesh, computed on this head by
-            :meth:`expression_model`; see :mod:`autobones.morph_targets`). True: one per AU of
+            :meth:`expression_model`; see :mod:`autobones.expressions.morph_targets`). True: one per AU of
             the definitions, both sides; ``"sides"``: also ``AU12L``/``AU12R``; a list: those.
             Needs the muscles of ``transfer``. Rigs with muscles always record the
             expression definitions in the sidecar (``expressions``), so a loaded rig

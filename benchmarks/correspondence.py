@@ -25,7 +25,7 @@ Landmark sets: all 27, and 10 well spread ones (SUBSET10 below): outer brows,
 outer eye corners, nasion, nose tip, subnasale, mouth corners, menton.
 
 Methods: ``TPS`` (warped vertex itself), ``TPS+STK`` (closest point of the
-target, :func:`autobones.stick.stick`), ``fit`` (:func:`autobones.fit.dense_correspondence`).
+target, :func:`autobones.rig_transfer.stick.stick`), ``fit`` (:func:`autobones.rig_transfer.correspondence.dense_correspondence`).
 Times are per call, median over the pairs, on this machine.
 
     python benchmarks/correspondence.py --remeshed # targets remeshed (see below)

@@ -9,7 +9,7 @@ Run by hand::
 correspondence); muscles, regions and skin weights ride these points. ICT-FaceKit's identities share
 one vertex list, so a point of identity a (a triangle and barycentric coordinates) names the same
 anatomical point on identity b. For each ordered pair (a, b): P_a[g] is expressed on a's triangle
-and evaluated on b (``autobones.transfer.ride``), and compared with P_b[g]. Error per generic vertex in % of b's outer-eye-corner
+and evaluated on b (``autobones.rig_transfer.under_skin.ride``), and compared with P_b[g]. Error per generic vertex in % of b's outer-eye-corner
 distance, mean / 95th percentile, over all generic vertices and per region of the generic rig.
 The benchmark that measures the fit itself between two ICT heads is ``correspondence.py``.
 """

@@ -4,7 +4,7 @@ Run by hand::
 
     python benchmarks/morph_blend.py
 
-The glb's morph targets (``autobones.morph_targets.au_morph_targets``) are each AU posed alone at
+The glb's morph targets (``autobones.expressions.morph_targets.au_morph_targets``) are each AU posed alone at
 intensity 1 minus the neutral head. An engine mixes them linearly; ``Rig.pose`` recomputes the
 model, which is not linear everywhere (jaw and lid rotations, the skull clamp, the unfolding).
 For the default head (placed + transferred with the built-in rig) and ICT identity002 (transferred

@@ -343,7 +343,7 @@ def main(argv=None):
     from autobones.io.mesh import load_mesh
     import autobones.placement.facial_bones
 
-    n_bones = autobones.facial.bone_count(args.density)
+    n_bones = autobones.placement.facial_bones.bone_count(args.density)
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
     mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 ** 30
     print(f"autobones place benchmark, {datetime.datetime.now():%Y-%m-%d %H:%M}")

@@ -1,24 +1,29 @@
-"""The sparse solver change, measured: ``place`` and ``transfer`` with the old and the new solver, same run.
+"""Which sparse factorisation for the symmetric positive definite systems: measured on real scans.
 
 Run by hand, not by the tests::
 
-    python benchmarks/solver.py               # ICT identity000 (26.7k vertices) and its Loop subdivisions (105k, 419k)
-    python benchmarks/solver.py --quick       # 26.7k only
+    python benchmarks/solver.py                 # ICT identity000 (26.7k vertices) and its Loop subdivisions (105k, 420k)
+    python benchmarks/solver.py --quick         # 26.7k and 105k only
+    python benchmarks/solver.py --no-calls      # the systems only, not whole place / transfer calls
 
-Every symmetric positive definite system in autobones (bone heat, attribute inpainting, heat
-diffusion of the generic rig's fields, the expression model's smoothing) now goes through
-``autobones.geometry.laplacian.factor_spd``: SuperLU in symmetric mode with a minimum-degree
-ordering of A + Aᵀ (``MMD_AT_PLUS_A``), factored once per matrix. Before, those systems were
-factored by SuperLU with its default COLAMD column ordering, and the heat diffusion of the rig
-builder by ``spsolve`` (COLAMD, one factorisation per call). The correspondence fit already used
-the symmetric ordering and is left as it is in both runs.
+Every SPD system in autobones (bone heat, attribute inpainting, heat diffusion of the rig builder,
+the expression model's smoothing, the correspondence fit) goes through
+``autobones.geometry.laplacian.factor_spd``, which factors once and solves every right-hand side.
+Two SuperLU orderings are compared here, and CHOLMOD when scikit-sparse (the ``[cholmod]`` extra)
+is installed:
 
-"old" here replaces ``factor_spd`` in every module that uses it (except the correspondence fit)
-by ``splu(A, permc_spec="COLAMD").solve``; "new" is the code as it is. The same meshes, bones and
-landmarks go through both, alternately, ``--repeat`` times; the fastest of each is kept. Printed:
-the weights stage of ``place`` (``Rig.timings``), the whole ``place`` and ``transfer`` calls, the
-ratio old / new, and the largest difference between the two results (skin weights; transferred
-fields) to show the orderings agree to round-off.
+- ``colamd``: SuperLU's default column ordering (what ``factor_spd`` uses);
+- ``mmd_symmetric``: minimum degree on A + Aᵀ, symmetric mode, no pivoting (what the correspondence
+  fit uses on its coarse copy, and what was proposed for every system).
+
+1. **Systems**: the bone-heat matrix ``L + diag(M h)`` of the whole mesh (intrinsic Laplacian,
+   ``h`` about what ``place`` uses), welded as ``place`` welds it and unwelded (the structure of
+   systems built on raw meshes, whose seams leave parts touching without sharing vertices),
+   factored and solved for 34 right-hand sides (``dense``'s bone count); best of ``--repeat``;
+   factor seconds, solve seconds, fill (nonzeros of the factors).
+2. **Whole calls**: ``place(density="dense")`` and ``transfer`` with every ``factor_spd`` caller
+   switched to one SuperLU ordering (CHOLMOD off; the correspondence fit keeps its own), alternately, best of
+   ``--repeat``; the largest difference between the two results shows they agree to round-off.
 
 Meshes are real scans, not smooth synthetic ones: the ICT-FaceKit identity000 head (26,719
 vertices, 56 parts: skin, eyes, teeth, gums), and the same head Loop-subdivided once and twice
@@ -32,40 +37,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import csc_matrix
-from scipy.sparse.linalg import splu
+import scipy.sparse as sp
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-
-
-def colamd_factor(A, use_cholmod=None):
-    """The old factorisation: SuperLU with its default COLAMD ordering."""
-    return splu(csc_matrix(A), permc_spec="COLAMD").solve
-
-
-def patched_modules():
-    """Every loaded autobones module that calls ``factor_spd`` (the correspondence fit excluded)."""
-    return [m for name, m in sorted(sys.modules.items())
-            if name.startswith("autobones") and getattr(m, "factor_spd", None) is not None
-            and not name.endswith("correspondence")]
-
-
-class Solver:
-    """Context manager: run with the old (COLAMD) or the new factorisation."""
-
-    def __init__(self, which):
-        self.which, self.saved = which, []
-
-    def __enter__(self):
-        if self.which == "old":
-            for m in patched_modules():
-                self.saved.append((m, m.factor_spd))
-                m.factor_spd = colamd_factor
-        return self
-
-    def __exit__(self, *exc):
-        for m, f in self.saved:
-            m.factor_spd = f
 
 
 def meshes(levels):
@@ -84,56 +58,142 @@ def meshes(levels):
             V, F = trimesh.remesh.subdivide_loop(V, F, iterations=1)
             V, F = np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64)
             names = sorted(lm)
-            C = closest_points(np.array([lm[n] for n in names]), V, F)[0]
-            lm = dict(zip(names, C))
+            lm = dict(zip(names, closest_points(np.array([lm[n] for n in names]), V, F)[0]))
         out.append((f"ICT identity000{' loop x%d' % k if k else ''}", V, F, dict(lm)))
     return out
 
 
-def run(fn, which, repeat):
-    best, result = None, None
-    for _ in range(repeat):
-        with Solver(which):
-            t = time.perf_counter()
-            result = fn()
-            dt = time.perf_counter() - t
-        best = dt if best is None else min(best, dt)
-    return best, result
+def bone_heat_system(V, F, welded):
+    """The bone-heat matrix ``L + diag(M h)`` of the whole mesh in head sizes, welded as ``place``
+    welds it (or not: the structure of the systems built on raw, unwelded meshes)."""
+    from autobones.geometry.laplacian import laplacian
+    from autobones.geometry.topology import weld
+
+    V = V / np.ptp(V, axis=0).max()
+    if welded:
+        V, F, _ = weld(V, F, 1e-6)
+        used = np.zeros(len(V), dtype=bool)
+        used[F.ravel()] = True
+        V, F = V[used], (np.cumsum(used) - 1)[F]
+    L, M = laplacian(V, F)
+    return (L + sp.diags(50.0 * M.diagonal())).tocsc()
+
+
+def system_rows(label, V, F, repeat, methods, welded, slow):
+    """Factor and solve the bone-heat system of the whole mesh with each method."""
+    from scipy.sparse.linalg import splu
+
+    from autobones.geometry.laplacian import ORDERINGS
+
+    A = bone_heat_system(V, F, welded)
+    b = np.random.default_rng(0).random((A.shape[0], 34))
+    label = f"{label} ({'welded' if welded else 'unwelded'})"
+    rows = []
+    for method in methods:
+        if method == "mmd_symmetric" and not welded and A.shape[0] > 200_000 and not slow:
+            rows.append((label, A.shape[0], method + " (skipped: minutes; --slow)", np.nan, np.nan, 0, np.nan))
+            continue
+        best = None
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            if method == "cholmod":
+                from sksparse.cholmod import cholesky
+
+                factor = cholesky(A)
+                fill = factor.L().nnz
+                solve = factor
+            else:
+                lu = splu(A, **ORDERINGS[method])
+                fill = lu.L.nnz + lu.U.nnz
+                solve = lu.solve
+            t1 = time.perf_counter()
+            x = solve(b)
+            t2 = time.perf_counter()
+            run = (t1 - t0, t2 - t1, fill, float(np.abs(A @ x - b).max()))
+            best = run if best is None or run[0] + run[1] < best[0] + best[1] else best
+        rows.append((label, A.shape[0], method) + best)
+        print(f"  {label}: {method} {best[0]:.2f} s + {best[1]:.2f} s", file=sys.stderr, flush=True)
+    return rows
+
+
+class Ordering:
+    """Context manager: every loaded module's ``factor_spd`` (but the correspondence fit's) with one ordering."""
+
+    def __init__(self, ordering):
+        self.ordering, self.saved = ordering, []
+
+    def __enter__(self):
+        import autobones.geometry.laplacian as lap
+
+        def factor(A, ordering="colamd", use_cholmod=None):
+            return lap.factor_spd(A, ordering=self.ordering, use_cholmod=False)
+
+        for name, module in sorted(sys.modules.items()):
+            if (name.startswith("autobones") and not name.endswith("laplacian")
+                    and not name.endswith("correspondence") and hasattr(module, "factor_spd")):
+                self.saved.append((module, module.factor_spd))
+                module.factor_spd = factor
+        return self
+
+    def __exit__(self, *exc):
+        for module, f in self.saved:
+            module.factor_spd = f
+
+
+def call_rows(label, V, F, lm, repeat):
+    import autobones
+
+    rows = []
+    for what, fn in (("place dense", lambda: autobones.place((V, F), density="dense")),
+                     ("transfer", lambda: autobones.transfer((V, F), landmarks=lm))):
+        best, result = {}, {}
+        for _ in range(repeat):
+            for ordering in ("colamd", "mmd_symmetric"):
+                with Ordering(ordering):
+                    t0 = time.perf_counter()
+                    result[ordering] = fn()
+                    dt = time.perf_counter() - t0
+                best[ordering] = min(dt, best.get(ordering, np.inf))
+        a, b = result["colamd"], result["mmd_symmetric"]
+        diff = float(np.abs(a.weights - b.weights).max())
+        for k in a.fields:
+            diff = max(diff, float(np.abs(np.asarray(a.fields[k], float) - np.asarray(b.fields[k], float)).max()))
+        rows.append((label, len(V), what, best["colamd"], best["mmd_symmetric"], diff))
+        print(f"  {label}: {what} done", file=sys.stderr, flush=True)
+    return rows
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="the 26.7k head only")
+    ap.add_argument("--quick", action="store_true", help="26.7k and 105k vertices only")
     ap.add_argument("--repeat", type=int, default=2)
-    ap.add_argument("--no-transfer", action="store_true")
+    ap.add_argument("--no-calls", action="store_true", help="the systems only")
+    ap.add_argument("--slow", action="store_true", help="also mmd_symmetric on the unwelded 420k system")
     args = ap.parse_args(argv)
+    methods = ["colamd", "mmd_symmetric"]
+    try:
+        import sksparse.cholmod  # noqa: F401  (only whether it is there)
 
-    import autobones
+        methods.append("cholmod")
+    except ImportError:
+        pass
 
-    rows = []
-    for label, V, F, lm in meshes(0 if args.quick else 2):
-        n = len(V)
-        place_fn = lambda: autobones.place((V, F), density="dense")  # noqa: E731
-        (t_old, r_old), (t_new, r_new) = run(place_fn, "old", args.repeat), run(place_fn, "new", args.repeat)
-        w_old, w_new = r_old.timings["weights"], r_new.timings["weights"]
-        diff = float(np.abs(r_old.weights - r_new.weights).max())
-        rows.append((label, n, "place dense: weights stage", w_old, w_new, diff))
-        rows.append((label, n, "place dense: whole call", t_old, t_new, diff))
-        print(f"  {label}: place done", file=sys.stderr, flush=True)
-        if args.no_transfer:
-            continue
-        tr_fn = lambda: autobones.transfer((V, F), landmarks=lm)  # noqa: E731
-        (t_old, r_old), (t_new, r_new) = run(tr_fn, "old", args.repeat), run(tr_fn, "new", args.repeat)
-        diff = max(float(np.abs(np.asarray(r_old.fields[k], float) - np.asarray(r_new.fields[k], float)).max())
-                   for k in r_old.fields)
-        diff = max(diff, float(np.abs(r_old.weights - r_new.weights).max()))
-        rows.append((label, n, "transfer: whole call", t_old, t_new, diff))
-        print(f"  {label}: transfer done", file=sys.stderr, flush=True)
+    systems, calls = [], []
+    for label, V, F, lm in meshes(1 if args.quick else 2):
+        for welded in (True, False):
+            systems += system_rows(label, V, F, args.repeat, methods, welded, args.slow)
+        if not args.no_calls:
+            calls += call_rows(label, V, F, lm, args.repeat)
 
-    print("\n| mesh | vertices | what | old (COLAMD) s | new (symmetric MMD) s | old / new | max difference |")
-    print("|---|---|---|---|---|---|---|")
-    for label, n, what, a, b, d in rows:
-        print(f"| {label} | {n:,} | {what} | {a:.2f} | {b:.2f} | {a / b:.2f}x | {d:.1e} |")
+    print("\n| mesh | vertices | method | factor s | solve 34 rhs s | total s | fill (nnz, M) | max residual |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|")
+    for label, n, method, tf, ts, fill, res in systems:
+        print(f"| {label} | {n:,} | {method} | {tf:.2f} | {ts:.2f} | {tf + ts:.2f} | {fill / 1e6:.1f} | {res:.0e} |")
+    if calls:
+        print("\n| mesh | vertices | call | colamd s | mmd_symmetric s | mmd / colamd | max difference |")
+        print("|---|---:|---|---:|---:|---:|---:|")
+        for label, n, what, a, b, d in calls:
+            print(f"| {label} | {n:,} | {what} | {a:.2f} | {b:.2f} | {b / a:.2f}x | {d:.1e} |")
 
 
 if __name__ == "__main__":

@@ -10,16 +10,16 @@ rendered by ``autobones.render`` from the front, three-quarter and side views in
 the head's detected canonical frame: skin coloured by the skin weights (each
 bone a colour, blended by weight), bones drawn as segments with their heads as
 dots; a second row shows the face / middle / back depth groups and the facial
-mask (seed 003 fig. 1).
+mask (fig. 1 of the bone-placement paper `place` implements).
 
 ``transfer_*``: the generic rig carried onto a landmarked head. ``landmarks_detected_*``:
 landmarks found by ``autobones.detect_landmarks`` on three human heads of different
-kinds (a scan, a sculpt, a statue), drawn by ``autobones.preview`` from the front and
+kinds (a scan, a sculpt, a statue), drawn by ``autobones.landmarks.preview`` from the front and
 the side with each name's detection confidence; ``landmarks_given_goat``: the same
 preview of a landmark file placed by hand (no face detector works on a goat).
 
 ``expressions_*``: the six emotion prototypes of ``generic_rig/expressions.json``
-(seed 002 Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
+(Erdoğdu 2010, Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
 transferred rig, neutral first, all from the front at one scale; the skin is tinted
 orange by how far each vertex moved (relative to the largest motion in the row).
 """

@@ -22,20 +22,30 @@ def laplacian(V, F):
     return robust_laplacian.mesh_laplacian(np.ascontiguousarray(V), np.ascontiguousarray(F))
 
 
-def factor_spd(A, use_cholmod=None):
+ORDERINGS = {
+    # SuperLU's default column ordering: the fastest measured on bone-heat systems of 26k-420k vertex
+    # scans (benchmarks/solver.py), and the one every solve but the correspondence fit used before
+    "colamd": dict(permc_spec="COLAMD"),
+    # minimum degree on A + A^T in symmetric mode, no pivoting: a third less fill, but its ordering
+    # step blows up on large meshes (a 420k-vertex bone-heat system: 362 s against 10 s for COLAMD)
+    "mmd_symmetric": dict(permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True)),
+}
+
+
+def factor_spd(A, ordering="colamd", use_cholmod=None):
     """Factor a sparse symmetric positive definite ``A`` (n, n) once; return ``solve(b)``.
 
-    ``b`` is (n,) or (n, k); the solution has its shape. SuperLU runs in symmetric mode with a
-    minimum-degree ordering of ``A + Aᵀ`` and no pivoting (what an SPD matrix allows): 1.2-1.8x
-    faster than COLAMD on 26k-419k vertex heads, same result to 1e-13. With scikit-sparse
-    installed (``use_cholmod`` None or True) CHOLMOD is used instead; round-off then differs
-    from SuperLU's at about 1e-13, so results are bit-identical only within one install.
+    ``b`` is (n,) or (n, k); the solution has its shape, so one factorisation serves every
+    right-hand side (all bones, all fields). ``ordering`` picks SuperLU's fill-reducing ordering
+    (a key of :data:`ORDERINGS`). With scikit-sparse installed (the ``[cholmod]`` extra) and
+    ``use_cholmod`` None or True, CHOLMOD's supernodal Cholesky is used instead, whatever the
+    ordering; its round-off differs from SuperLU's at about 1e-13 relative, so results are
+    bit-identical only between runs of the same install.
     """
     A = sp.csc_matrix(A)
     if _cholmod is not None and use_cholmod is not False:
         return _cholmod(A)
-    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
-    return lu.solve
+    return splu(A, **ORDERINGS[ordering]).solve
 
 
 def diffuse(u, L, M, t):

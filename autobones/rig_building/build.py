@@ -169,7 +169,7 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     if missing:
         raise AutobonesError(
             f"build_rig: {len(missing)} landmark(s) missing: {', '.join(missing)}; the skeleton, "
-            f"regions and muscles need {len(need)} contract names (autobones.rig_transfer.build.required_landmarks())")
+            f"regions and muscles need {len(need)} contract names (autobones.rig_building.build.required_landmarks())")
     if frame is None:
         frame = detect_frame(V, F)
     Vc = frame.to_canonical(V)
