@@ -306,15 +306,3 @@ class Rig:
                 if os.path.exists(tmp):
                     os.remove(tmp)
         return targets
-
-
-_dataclass_init = Rig.__init__
-
-
-def _init(self, *args, extra=None, **kwargs):
-    # ``extra=`` (a sidecar-style dict, as older code passed) fills the typed attributes
-    _dataclass_init(self, *args, **{**(sidecar_attributes(extra) if extra else {}), **kwargs})
-
-
-_init.__doc__ = _dataclass_init.__doc__
-Rig.__init__ = _init

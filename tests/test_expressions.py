@@ -427,7 +427,7 @@ def test_the_model_rebuilds_from_the_saved_rig(model, tmp_path):
     import json
 
     from autobones.orient import Frame
-    from autobones.rig import Rig, sidecar_paths
+    from autobones.rig import Rig, sidecar_attributes, sidecar_paths
     from autobones.skeleton import Skeleton
 
     rig, m = model("ict")
@@ -444,7 +444,7 @@ def test_the_model_rebuilds_from_the_saved_rig(model, tmp_path):
     again = Rig(vertices=rig.vertices, faces=rig.faces, skeleton=skel, weights=z["weights"].astype(np.float64),
                 labels=np.array(doc["labels"]), facial_mask=np.zeros(len(rig.vertices), bool),
                 frame=Frame(np.array(fr["rotation"]), np.array(fr["origin"]), fr["head_size"]),
-                extra={k: doc[k] for k in ("muscles", "landmarks", "field_labels")},
+                **sidecar_attributes({k: doc[k] for k in ("muscles", "landmarks", "field_labels")}),
                 fields={k[6:]: z[k] for k in z.files if k.startswith("field/")})
     for kw in ({"expression": "happiness"}, {"au": {26: 1.0}}, {"au": {43: 1.0}}, {"expression": "anger"}):
         assert np.abs(again.pose(**kw) - m.pose(**kw)).max() < 1e-6 * rig.frame.size, kw
