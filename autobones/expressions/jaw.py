@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.laplacian import diffuse
 from ..geometry.smooth import ramp
 
 
@@ -40,19 +39,18 @@ def jaw_column(w, V, skin, mouth, menton, fu, params, surface):
     surface : SkinSurface
         Its Laplacian and mass diffuse the weight.
     """
-    index, first, Lp, M = surface.index, surface.first, surface.laplacian, surface.mass
     hw, dx = mouth.half_width, mouth.dx
     # under the chin the jaw swings toward the neck: spread its weight there so the skin
     # stretches instead of folding (heat diffusion, as build_rig smooths it)
     spread = float(params["jaw_spread"]) * fu
-    jaw_s = np.clip(diffuse(w[first], Lp, M, t=spread ** 2), 0.0, 1.0)[index] if spread > 0 else w
+    jaw_s = np.clip(surface.diffuse(w, spread ** 2), 0.0, 1.0) if spread > 0 else w
     below = ramp(mouth.signed, 0.0, -0.1 * fu) * skin
     jaw_b = (1.0 - below) * w + below * jaw_s
     # beside the mouth the cheek is one sheet from the cheekbone to the mandible: lateral of
     # the mouth corners it stretches as the jaw opens, the jaw weight diffusing up into it
     cheek = float(params["cheek_spread"]) * fu
     if cheek > 0:
-        jaw_c = np.clip(diffuse(w[first], Lp, M, t=cheek ** 2), 0.0, 1.0)[index]
+        jaw_c = np.clip(surface.diffuse(w, cheek ** 2), 0.0, 1.0)
         lateral = ramp(dx, 0.8 * hw, 1.1 * hw) * skin * (1.0 - below)
         jaw_b = np.where(lateral > 0, np.maximum(jaw_b, lateral * jaw_c + (1.0 - lateral) * jaw_b), jaw_b)
     # under the chin the opening jaw swings back toward the neck: the skin there follows it

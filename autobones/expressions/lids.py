@@ -14,7 +14,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry.laplacian import diffuse
 from ..geometry.smooth import ramp
 
 LIDS = ("upper_l", "upper_r", "lower_l", "lower_r")
@@ -150,7 +149,7 @@ def lid_weights(V, F, skin, landmarks, eyes, fu, lid, surface):
         pivots[e] = c
     t_l = (float(lid["smoothing"]) * fu) ** 2
     if t_l > 0:
-        lw = diffuse(W[:, surface.first].T, surface.laplacian, surface.mass, t=t_l)[surface.index].T
+        lw = surface.diffuse(W.T, t_l).T
         # diffusion reaches the whole skin with vanishing weights: the lids keep their own area
         W = np.where(lw > 1e-3, np.clip(lw, 0.0, 1.0), 0.0) * skin
     return W, close_deg, pivots

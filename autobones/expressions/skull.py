@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.laplacian import diffuse
 from ..geometry.smooth import ramp
 
 # the region labels of a transferred rig, in order, when its sidecar does not name them
@@ -40,8 +39,7 @@ def tissue_thickness(region, labels, skull, fu, surface):
             if r_name in skull:
                 thick[region == r_i] = float(skull[r_name]) * fu
     # the offset skull is smooth: region thicknesses blend over ~1 cm of skin
-    return diffuse(thick[surface.first], surface.laplacian, surface.mass,
-                   t=(float(skull["blend"]) * fu) ** 2)[surface.index]
+    return surface.diffuse(thick, (float(skull["blend"]) * fu) ** 2)
 
 
 def skull_clamp(mouth):

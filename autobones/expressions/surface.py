@@ -12,8 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..geometry.laplacian import laplacian
-from ..geometry.normals import vertex_normals
+from ..geometry.areas import triangle_areas
+from ..geometry.laplacian import diffuse, laplacian
+from ..geometry.normals import triangle_normals, vertex_normals
 from ..geometry.topology import mesh_parts, weld
 
 
@@ -77,9 +78,11 @@ class SkinSurface:
     relax_weights: sp.csr_matrix
     relax_degree: np.ndarray
 
-
-def _areas(V, F):
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    def diffuse(self, u, t):
+        """Per-vertex field ``u`` (n,) or (n, k) after one heat step over time ``t`` (head sizes
+        squared) on the welded mesh (:func:`~autobones.geometry.laplacian.diffuse`), read back to
+        every vertex."""
+        return diffuse(u[self.first], self.laplacian, self.mass, t=t)[self.index]
 
 
 def weld_if_split(V, F):
@@ -90,7 +93,7 @@ def weld_if_split(V, F):
     one; ``V``, ``F`` and the identity when the mesh holds together.
     """
     n = len(V)
-    face_area = _areas(V, F)
+    face_area = triangle_areas(V, F)
     part0 = mesh_parts(n, F)
     if np.bincount(part0[F[:, 0]], weights=face_area, minlength=n).max() >= 0.2 * face_area.sum():
         Vw, Fw, index = V, F, np.arange(n)
@@ -119,7 +122,7 @@ def skin_surface(V, F, eye_weights, smoothing_passes):
     nw = len(Vw)
     part_w = mesh_parts(nw, Fw)
     part = part_w[index]
-    skin = part == int(np.argmax(np.bincount(part_w[Fw[:, 0]], weights=_areas(Vw, Fw), minlength=nw)))
+    skin = part == int(np.argmax(np.bincount(part_w[Fw[:, 0]], weights=triangle_areas(Vw, Fw), minlength=nw)))
     for w in eye_weights:
         skin &= w < 0.5
     Nw = vertex_normals(Vw, Fw)
@@ -128,9 +131,9 @@ def skin_surface(V, F, eye_weights, smoothing_passes):
     skin_w = np.zeros(nw, dtype=bool)
     skin_w[index[skin]] = True
     Fs = Fw[skin_w[Fw].all(axis=1)]
-    a_s = _areas(Vw, Fs)
+    a_s = triangle_areas(Vw, Fs)
     Fs = Fs[a_s > 1e-9 * max(float(np.median(a_s)) if len(a_s) else 0.0, 1e-300)]
-    n0 = np.cross(Vw[Fs[:, 1]] - Vw[Fs[:, 0]], Vw[Fs[:, 2]] - Vw[Fs[:, 0]])
+    n0 = triangle_normals(Vw, Fs)
     # the offset skull is smooth: its directions are the skin normals smoothed over ~1 cm
     Ns = Nw.copy()
     for _ in range(int(smoothing_passes)):

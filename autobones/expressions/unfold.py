@@ -16,11 +16,13 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from ..geometry.normals import triangle_normals
+
 
 def turned_faces(P, F, n0):
     """(m,) bool: triangles ``F`` (m, 3) at positions ``P`` (n, 3) whose normal turned from the
     rest normals ``n0`` (m, 3) by over 90 degrees."""
-    return (n0 * np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])).sum(axis=1) <= 0
+    return (n0 * triangle_normals(P, F)).sum(axis=1) <= 0
 
 
 def flipped_faces(V0, V1, F, min_area=0.0):
@@ -29,7 +31,7 @@ def flipped_faces(V0, V1, F, min_area=0.0):
     ``V0``, ``V1`` (n, 3) rest and posed vertices, ``F`` (m, 3); triangles whose rest area is
     not above ``min_area`` (units of V0 squared; degenerate ones at the default 0) never count.
     """
-    n0 = np.cross(V0[F[:, 1]] - V0[F[:, 0]], V0[F[:, 2]] - V0[F[:, 0]])
+    n0 = triangle_normals(V0, F)
     return (0.5 * np.linalg.norm(n0, axis=1) > min_area) & turned_faces(V1, F, n0)
 
 
