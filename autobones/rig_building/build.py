@@ -275,7 +275,6 @@ def _skin_weights(Vc, F, L, cm, jaw0, eyes):
     eye_any = eye_w["l"] + eye_w["r"]
     jaw = jaw * (1.0 - eye_any)
 
-
     # neck: the skin below the neck plane, fading over 3 cm across it (bone heat alone gave the
     # face to the neck bone, whose top sits nearer the lips than the head bone does)
     neck_w = np.clip(diffuse(step(-_above_neck_plane(Vc, L, cm), 0.0, 3.0 * cm), *lap, t=(0.5 * cm) ** 2), 0.0, 1.0)
@@ -299,7 +298,6 @@ def _place_muscles(muscles, L, Vc, F, fu, cm, wn, frame, fields):
         mm["origin_depth_length"] = mm["origin_depth_canonical"] * frame.size
         out_muscles.append(mm)
     return out_muscles
-
 
 
 def _check_sides(L):

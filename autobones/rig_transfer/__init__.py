@@ -6,9 +6,14 @@ Different Face Models"), one module a stage:
 - ``correspondence``: thin-plate-spline warp from the landmarks, then a staged least-squares fit
   of the generic surface to the head (after Bibliowicz 2005, ch. 5), giving a dense correspondence;
 - ``stick``: closest-point projection of the fitted surface onto the head, with fold detection;
+- ``under_skin``: a second TPS on a spread subsample of the correspondence carries the skeleton and
+  the muscle origins; muscle insertions ride the correspondence;
 - ``fields``: per-vertex attributes copied through the correspondence, inpainted where it is unreliable;
-- ``labelled_rig`` and ``build``: the generic rig's type, and building one from a base head;
+- ``eyes``: modelled eyeballs bound rigidly to the eye bones, the eye bones centred in them;
 - ``pipeline``: :func:`transfer`, which runs them and returns a :class:`autobones.rig.Rig`.
+
+The generic rig's type is :class:`autobones.labelled_rig.LabelledRig`; :mod:`autobones.rig_building`
+builds one from a base head.
 """
 from .pipeline import transfer
 

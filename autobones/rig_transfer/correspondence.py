@@ -86,7 +86,7 @@ from ..errors import AutobonesError
 from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
-from ..geometry.normals import vertex_normals
+from ..geometry.normals import triangle_normals, vertex_normals
 from ..geometry.rotations import axis_turn, rotate_between
 from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
 from ..geometry.validate import mesh_arrays
@@ -297,9 +297,10 @@ class _Matcher:
         self.V_tgt, self.F_tgt, self.tgt, self.labels, self.in_face = V_tgt, F_tgt, tgt, labels, in_face
         self.bidx, self.btrees, self.cos_max, self.exact = bidx, btrees, cos_max, exact
         self.symmetric_weight, self.reverse = symmetric_weight, reverse
-        self.face_labels = tgt["part"][F_tgt[:, 0]]
-        FN = np.cross(V_tgt[F_tgt[:, 1]] - V_tgt[F_tgt[:, 0]], V_tgt[F_tgt[:, 2]] - V_tgt[F_tgt[:, 0]])
-        self.FN_tgt = FN / np.maximum(np.linalg.norm(FN, axis=1, keepdims=True), 1e-300)
+        if exact:  # only the exact closest points land on faces
+            self.face_labels = tgt["part"][F_tgt[:, 0]]
+            FN = triangle_normals(V_tgt, F_tgt)
+            self.FN_tgt = FN / np.maximum(np.linalg.norm(FN, axis=1, keepdims=True), 1e-300)
 
     def __call__(self, X, N):
         V_tgt, labels, in_face, bidx, tgt = self.V_tgt, self.labels, self.in_face, self.bidx, self.tgt
@@ -413,13 +414,12 @@ def _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices, sche
     iterations), its displacements from the TPS carried to every source vertex, then at full
     resolution with ``fine_schedule``; a small source is fitted at full resolution with
     ``schedule`` only. Returns X (n, 3), labels (n,), setup and fit seconds."""
-    X_tps = tps.transform(V_src)
     X0, t_setup, t_fit = None, 0.0, 0.0
     stages, iterations = schedule
     if coarse_vertices and len(V_src) > 1.5 * coarse_vertices:
         Vc, Fc = _decimate(V_src, F_src, coarse_vertices)
         Xc, _, (ts, tf) = _fit(Vc, Fc, V_tgt, F_tgt, P, Q, tps, None, stages, iterations, *args)
-        X0 = X_tps + _interpolate(Vc, Fc, Xc - tps.transform(Vc), V_src, F_src)
+        X0 = tps.transform(V_src) + _interpolate(Vc, Fc, Xc - tps.transform(Vc), V_src, F_src)
         t_setup, t_fit = ts, tf
         stages, iterations = fine_schedule
     X, labels, (ts, tf) = _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, *args)

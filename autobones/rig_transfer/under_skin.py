@@ -105,10 +105,14 @@ def carry_muscles(muscles, under, V_src, F_src, P):
     list of dict
         Copies with ``origin`` and ``insertion`` (3,) float64 arrays in the target frame.
     """
+    if not muscles:
+        return []
+    # every insertion in one closest-point query (one AABB tree, not one a muscle)
+    insertions = ride(np.array([m["insertion"] for m in muscles], dtype=np.float64), V_src, F_src, P)
     out = []
-    for m in muscles:
+    for m, ins in zip(muscles, insertions):
         m = dict(m)
         m["origin"] = under.transform(np.asarray(m["origin"], dtype=np.float64)[None])[0]
-        m["insertion"] = ride(np.asarray(m["insertion"], dtype=np.float64)[None], V_src, F_src, P)[0]
+        m["insertion"] = ins
         out.append(m)
     return out
