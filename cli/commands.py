@@ -65,8 +65,9 @@ def cmd_pose(args):
     import numpy as np
 
     import autobones
+    from autobones.errors import AutobonesError
     from autobones.expressions.definitions import parse_au_key
-    from autobones.io.posed import write_posed_mesh
+    from autobones.io.posed import FORMATS, write_posed_mesh
 
     t = time.perf_counter()
     au = {parse_au_key(k)[0]: v for k, v in pairs(args.au, "--au", default=1.0).items()}
@@ -77,14 +78,10 @@ def cmd_pose(args):
     gaze, look_at = vector(args.gaze, 2, "--gaze"), vector(args.look_at, 3, "--look-at")
     head_deg, neck_deg = vector(args.head_deg, 3, "--head"), vector(args.neck_deg, 3, "--neck")
     out = args.output or os.path.splitext(os.path.basename(args.rig))[0].removesuffix(".rig") + ".pose.obj"
-    if os.path.splitext(out)[1].lower() not in (".obj", ".glb"):
-        from autobones.errors import AutobonesError
-
+    if os.path.splitext(out)[1].lower() not in FORMATS:  # refused before the rig is read
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
     rig = autobones.load_rig(args.rig)
     if not rig.muscles:
-        from autobones.errors import AutobonesError
-
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
     if args.definitions:

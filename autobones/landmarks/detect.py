@@ -213,7 +213,7 @@ class LandmarkDetector:
                 up = up - (up @ left) * left
                 up /= np.linalg.norm(up)
                 Q = np.vstack([left, up, np.cross(left, up)])
-                found2, P2 = look(Vc @ (Q @ M).T, self.size, 0.05 if first else margin)
+                _, P2 = look(Vc @ (Q @ M).T, self.size, 0.05 if first else margin)
                 if P2 is not None and nose_forward(P2, table):
                     M, P0 = Q @ M, P2
             return M, P0
@@ -265,7 +265,7 @@ class LandmarkDetector:
             raise NoFaceError(NO_FACE.format(what=what))
         X, w = np.array(cands), np.array(weights)
         table = getattr(detector, "points", MEDIAPIPE_POINTS)
-        names = [n for n in table]
+        names = list(table)
         Xn = np.stack([X[:, list(table[n])].mean(axis=1) for n in names], axis=1)
         wn = np.stack([w[:, list(table[n])].min(axis=1) for n in names], axis=1)
         # a name every view saw only grazing or on a surface facing away (an eye corner whose
