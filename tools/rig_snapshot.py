@@ -49,7 +49,7 @@ Usage (from the repository root)::
     (plus PYTHONPATH for the batch's worker processes).
 
     Inputs: the heads under ``--data`` (default ``<repo>/../shared/data``), and the frozen
-    reference files under ``--ref`` (default /work/baseline): the goat and robot landmark files
+    reference files under ``--ref`` (default: this checkout): the goat and robot landmark files
     (``tests/landmarks/``) and the default head + landmarks for ``build-rig``
     (``generic_rig/default_head.obj``, ``.landmarks.json``). Both snapshots must use the same
     ``--data`` and ``--ref`` so the inputs are the same bytes.
@@ -111,7 +111,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 DEFAULT_DATA = os.path.normpath(os.path.join(REPO, "..", "shared", "data"))
-DEFAULT_REF = "/work/baseline"
+DEFAULT_REF = REPO  # this checkout; pass the same --ref to both runs
 
 SKIP_TOP = {"jobs.json", "provenance.json", "_logs", "_inputs"}
 IGNORED_KEYS = {"time", "seconds", "timings", "finished", "started", "elapsed", "host", "pid",
