@@ -123,6 +123,15 @@ def mesh_bytes(z, name, rel=None):
     return ("\n".join(lines) + "\n").encode("ascii")
 
 
+def flat_grid(n=21, half=1.0, z=0.0):
+    """A flat ``n x n`` grid of side ``2 half`` at height ``z`` facing +Z: V (n*n, 3), F int64."""
+    x, y = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n))
+    V = np.c_[x.ravel(), y.ravel(), np.full(n * n, float(z))]
+    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel()
+    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]]
+    return V, F.astype(np.int64)
+
+
 def icosphere(subdivisions=3, radius=1.0):
     import trimesh
 
@@ -140,8 +149,6 @@ def run_blender_check(glb, report_path):
     Fails (never skips) when Blender or its numpy is missing.
     """
     import json
-    import os
-    import shutil
     import subprocess
 
     import pytest

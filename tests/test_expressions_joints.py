@@ -12,16 +12,14 @@ from autobones.expressions.mouth import mouth_line
 from autobones.expressions.mouth_parts import inner_mouth_parts, mouth_part_weights
 from autobones.expressions.surface import skin_surface
 from autobones.geometry.rotations import align_rotation, axis_rotation, euler_rotation, x_turn
+from shared_data import flat_grid
 
 PARAMS = model_parameters(load_expressions())
 
 
 def face(n=41, z=0.0):
     """A flat 2 x 2 sheet at height ``z`` facing +Z, its faces and SkinSurface."""
-    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
-    V = np.c_[x.ravel(), y.ravel(), np.full(n * n, z)]
-    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel()
-    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]].astype(np.int64)
+    V, F = flat_grid(n, 1.0, z)
     return V, F, skin_surface(V, F, [], 10)
 
 

@@ -8,6 +8,7 @@ from autobones.expressions.muscles import MuscleJoints, influence_fields
 from autobones.expressions.skull import skull_clamp, slide_over_bone, tissue_thickness
 from autobones.expressions.surface import skin_surface
 from autobones.expressions.wires import locator_weights, muscle_basis, muscle_wires, smooth_muscle_fields
+from shared_data import flat_grid
 
 DOC = load_expressions()
 PARAMS = model_parameters(DOC)
@@ -16,10 +17,7 @@ TYPES = muscle_types(DOC)
 
 def face(n=41):
     """A flat 2 x 2 face (z = 0, facing +Z, fu = 1) with a mouth from x = -0.5 to 0.5 at y = 0."""
-    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel()
-    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]].astype(np.int64)
+    V, F = flat_grid(n)
     surf = skin_surface(V, F, [], 10)
     corners = (np.array([0.5, 0.0, 0.0]), np.array([-0.5, 0.0, 0.0]), np.array([0.0, 0.0, 0.0]))
     mouth = mouth_line(V, surf.normals, surf.skin, corners, np.array([0.0, 0.0, -1.0]), 1.0, PARAMS["lips"])

@@ -7,17 +7,14 @@ from autobones.expressions.definitions import load_expressions, model_parameters
 from autobones.expressions.mouth import mouth_corners, mouth_line
 from autobones.expressions.surface import skin_surface, weld_if_split
 from autobones.expressions.unfold import flipped_faces, rigid_patches, turned_faces, unfold
+from shared_data import flat_grid
 
 PARAMS = model_parameters(load_expressions())
 
 
 def grid(n=21, half=1.0):
     """A flat (n*n, 3) grid in the z = 0 plane facing +Z, and its faces."""
-    x, y = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel()
-    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]]
-    return V, F.astype(np.int64)
+    return flat_grid(n, half)
 
 
 def test_a_mesh_in_pieces_is_welded_and_a_whole_one_is_not():
