@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import AutobonesError
-from .io.jsonable import jsonable
+from .io.jsonable import jsonable, strict_dumps
 from .io.obj import read_obj, write_obj
 from .skeleton import Skeleton
 
@@ -153,7 +153,7 @@ class LabelledRig:
         try:
             os.chmod(tmp, 0o755)
             with open(os.path.join(tmp, "rig.json"), "w", encoding="utf-8") as fh:
-                json.dump(self.to_json(), fh, indent=1)
+                fh.write(strict_dumps(self.to_json(), indent=1))
                 fh.write("\n")
             write_obj(os.path.join(tmp, "mesh.obj"), self.vertices, self.faces, comment="autobones labelled rig skin")
             arrays = {"weights": _stored(self.weights)}

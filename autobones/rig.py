@@ -1,7 +1,6 @@
 """The Rig: a mesh with its skeleton, skin weights and labels, and how it is saved."""
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -10,7 +9,8 @@ from typing import Optional
 import numpy as np
 
 from .errors import AutobonesError
-from .io.atomic import output_folder, temp_beside
+from .io.atomic import check_destination, replace_all, temp_beside
+from .io.jsonable import strict_dumps
 from .io.gltf import write_glb
 from .placement.segment import LABEL_NAMES
 from .skeleton import Skeleton
@@ -268,7 +268,10 @@ class Rig:
         path = os.fspath(path)
         if not path.lower().endswith(".glb"):
             raise AutobonesError(f"{path}: the output must be a .glb file")
-        output_folder(path)
+        json_path, npz_path = sidecar_paths(path)
+        targets = [path, json_path, npz_path]
+        for target in targets:  # every destination before any work: the message names the file in the way
+            check_destination(target, "the rig")
         morphs, skipped = [], []
         if expressions is not False and expressions is not None:
             from .expressions.morph_targets import au_morph_targets
@@ -278,29 +281,27 @@ class Rig:
         side = self.sidecar()
         if record is not None:
             side["expressions"] = record
-        json_path, npz_path = sidecar_paths(path)
-        targets = [path, json_path, npz_path]
         temps = []
         try:
-            for target in targets:
-                fd, tmp = temp_beside(target, suffix=os.path.splitext(target)[1])
-                os.close(fd)
-                temps.append(tmp)
-            write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
-                      extras={"autobones": {"sidecar": os.path.basename(json_path)}},
-                      markers=self.muscle_markers(), morph_targets=morphs)
-            with open(temps[1], "w") as fh:
-                json.dump(side, fh, indent=1)
-            with open(temps[2], "wb") as fh:
-                # the glb has float32 positions: the exact input vertices are kept here (load_rig)
-                np.savez_compressed(fh, weights=self.weights.astype(np.float32),
-                                    bone_names=np.array(self.skeleton.names),
-                                    vertices=np.asarray(self.vertices, dtype=np.float64),
-                                    **{f"field/{k}": v for k, v in self.fields.items()})
-            for tmp, target in zip(temps, targets):
-                os.replace(tmp, target)
-        except OSError as exc:
-            raise AutobonesError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+            try:
+                for target in targets:
+                    fd, tmp = temp_beside(target, suffix=os.path.splitext(target)[1])
+                    os.close(fd)
+                    temps.append(tmp)
+                write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
+                          extras={"autobones": {"sidecar": os.path.basename(json_path)}},
+                          markers=self.muscle_markers(), morph_targets=morphs)
+                with open(temps[1], "w") as fh:
+                    fh.write(strict_dumps(side, indent=1))  # strict JSON: an undefined value is null, never NaN
+                with open(temps[2], "wb") as fh:
+                    # the glb has float32 positions: the exact input vertices are kept here (load_rig)
+                    np.savez_compressed(fh, weights=self.weights.astype(np.float32),
+                                        bone_names=np.array(self.skeleton.names),
+                                        vertices=np.asarray(self.vertices, dtype=np.float64),
+                                        **{f"field/{k}": v for k, v in self.fields.items()})
+            except OSError as exc:
+                raise AutobonesError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+            replace_all(zip(temps, targets), "the rig")  # all three or none, the file at fault named
         finally:
             for tmp in temps:
                 if os.path.exists(tmp):

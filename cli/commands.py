@@ -5,7 +5,7 @@ import os
 import sys
 import time
 
-from .values import number, pairs, vector
+from .values import number, pairs, seed, vector
 
 
 def cmd_place(args):
@@ -18,14 +18,30 @@ def cmd_place(args):
                              "autobones transfer HEAD --landmarks FILE --expressions -o OUT.glb")
     head = args.head
     out = args.output or _default_out(head)
+    random_state = seed(args.seed, "--seed")
+    _never_the_input(_rig_outputs(out), [head, args.landmarks])
     t = time.perf_counter()
-    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=args.seed,
+    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=random_state,
                           landmarks=args.landmarks, rig=args.rig)
     written = rig.save(out)
     print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
           f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
           f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
     return 0
+
+
+def _rig_outputs(out):
+    """The three files ``Rig.save(out)`` writes (a name without .glb is refused by the save itself)."""
+    from autobones.rig import sidecar_paths
+
+    return [out, *sidecar_paths(out)] if out.lower().endswith(".glb") else [out]
+
+
+def _never_the_input(outputs, inputs):
+    """Refuse, before any work, an output path that is one of the files read (``place a.glb -o a.glb``)."""
+    from autobones.io.atomic import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs(outputs, inputs)
 
 
 def _default_out(head):
@@ -37,6 +53,7 @@ def cmd_transfer(args):
     import autobones
 
     out = args.output or _default_out(args.head)
+    _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
     rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
     written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
@@ -80,6 +97,7 @@ def cmd_pose(args):
     out = args.output or os.path.splitext(os.path.basename(args.rig))[0].removesuffix(".rig") + ".pose.obj"
     if os.path.splitext(out)[1].lower() not in FORMATS:  # refused before the rig is read
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
+    _never_the_input([out], [*_rig_outputs(args.rig), args.definitions])
     rig = autobones.load_rig(args.rig)
     if not rig.muscles:
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
@@ -106,6 +124,9 @@ def cmd_landmarks(args):
     from autobones.landmarks.preview import save_preview
 
     t = time.perf_counter()
+    out = args.output or (None if args.source and args.preview else
+                          os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
+    _never_the_input([out, args.preview], [args.head, args.source])
     V, F = autobones.load_mesh(args.head)
     if args.source:
         frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
@@ -119,8 +140,6 @@ def cmd_landmarks(args):
             how += "; dropped " + ", ".join(f"{n} ({why})" for n, why in lm.dropped.items())
         if lm.flagged:
             how += "; check " + ", ".join(sorted(lm.flagged))
-    out = args.output or (None if args.source and args.preview else
-                          os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
     if args.preview:
         save_preview(args.preview, V, F, lm, frame=frame, confidence=confidence)
     if out:
@@ -134,6 +153,13 @@ def cmd_landmarks(args):
 def cmd_build_rig(args):
     import autobones
 
+    from autobones.errors import AutobonesError
+
+    folder = os.path.realpath(args.output)
+    for inp in (args.base, args.landmarks):  # the output folder is replaced as a whole
+        if os.path.realpath(inp) == folder or os.path.realpath(inp).startswith(folder + os.sep):
+            raise AutobonesError(f"{args.output}: the output folder holds the input {inp}, and is replaced as a "
+                                 "whole; choose another folder (-o)")
     t = time.perf_counter()
     rig = autobones.build_rig(args.base, args.landmarks)
     rig.save(args.output)

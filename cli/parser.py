@@ -34,7 +34,7 @@ def add_place(sub):
     p.add_argument("--density", default="medium",
                    help="facial bones: sparse (8), medium (16, default), dense (32) or a number")
     _axes(p)
-    p.add_argument("--seed", type=int, default=0, help="random seed of the k-means restarts (default 0)")
+    p.add_argument("--seed", default="0", help="random seed of the k-means restarts, a whole number >= 0 (default 0)")
     p.add_argument("--landmarks", help="optional landmark file: transfer the generic rig's neck, head, jaw and "
                                       "eyes first and place the facial bones on the transferred face")
     p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")

@@ -1,4 +1,4 @@
-"""Option values of ``autobones pose``: numbers, NAME=VALUE pairs, comma-separated vectors."""
+"""Option values: numbers, seeds, NAME=VALUE pairs, comma-separated vectors."""
 from __future__ import annotations
 
 
@@ -13,6 +13,18 @@ def number(text, what):
     if v != v or v in (float("inf"), float("-inf")):
         raise AutobonesError(f"{what}: {text!r} is not a finite number")
     return v
+
+
+def seed(text, what="--seed"):
+    """``text`` as a seed: a whole number >= 0 (numpy's generators take no other)."""
+    from autobones.placement.facial_bones import check_seed
+    from autobones.errors import AutobonesError
+
+    try:
+        v = int(str(text).strip())
+    except ValueError:
+        raise AutobonesError(f"{what} {text!r}: the seed must be a whole number >= 0 (e.g. 0, 1, 42)") from None
+    return check_seed(v, what)
 
 
 def pairs(items, option, default=None):

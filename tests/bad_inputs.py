@@ -83,10 +83,10 @@ def mesh_cases():
     add("empty.obj", b"", "failed", "empty", "nothing to read")
     add("random_obj.obj", rng.bytes(4096), "failed", "", "random bytes: no vertex lines, or lines that are not numbers")
     add("random_ply.ply", rng.bytes(4096), "failed", "ply", "random bytes, no PLY header")
-    add("random_stl.stl", rng.bytes(4096), "failed", "stl", "random bytes read as a binary STL claim far more "
-                                                        "triangles than the file holds")
+    add("random_stl.stl", rng.bytes(4096), "failed", "not a valid stl", "random bytes: a binary STL's size does "
+        "not match its triangle count, and they are not text starting with 'solid'")
     add("random_glb.glb", rng.bytes(4096), "failed", "glb", "random bytes, no glTF magic")
-    add("random_off.off", rng.bytes(4096), "failed", "off", "random bytes, no OFF header")
+    add("random_off.off", rng.bytes(4096), "failed", "not a valid off", "random bytes, no OFF header")
     add("text_as_numbers.obj", b"v a b c\nv 1 2 3\nv 0 1 0\nf 1 2 3\n", "failed", "obj",
         "a vertex line whose coordinates are not numbers")
     # truncated files
@@ -116,6 +116,19 @@ def mesh_cases():
     add("cloud_obj.obj", obj_bytes(V, np.zeros((0, 3), int)), "failed", "no faces", "vertices, no faces")
     add("one_triangle.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "failed", "faces", "a single triangle")
     add("flat.obj", obj_bytes(V * [1, 1, 0], F), "failed", "flat", "all z = 0: no volume")
+    m = 500
+    strip = np.linspace(0.0, 1.0, m)[:, None] * [0.3, 0.7, 0.9] + [0.1, 0.2, 0.3]  # on one slanted line
+    add("collinear_strip.obj", obj_bytes(strip, [[i, i + 1, i + 2] for i in range(m - 2)]), "failed", "zero area",
+        "498 triangles with their corners on one line (total area ~1e-16, not exactly 0): no surface")
+    # a few vertices far from the rest decide the bounding box, and with it the frame and every tolerance
+    size = float(np.linalg.norm(np.ptp(V, axis=0)))
+    for tag, far in (("1e9", [1e9, 1e9, 1e9]), ("1e7", [1e7, -1e7, 1e7])):
+        add(f"stray_triangle_{tag}.obj", obj_bytes(np.vstack([V, far]), np.vstack([F, [[F[0, 0], F[0, 1], len(V)]]])),
+            "failed", "outlier", f"the head plus one triangle to a vertex at {tag}")
+    for tag, k in (("1e3", 1e3), ("1e5", 1e5)):
+        tip = V.mean(axis=0) + [0.0, k * size, 0.0]
+        add(f"spike_{tag}.obj", obj_bytes(np.vstack([V, tip]), np.vstack([F, [[F[0, 0], F[0, 1], len(V)]]])),
+            "failed", "outlier", f"one spike triangle {tag} head sizes long")
     # bad indices
     add("huge_index.obj", obj_bytes(V, F) + b"f 1 2 99999999999999\n", "failed", "out of range",
         "a face index far beyond the vertex count")

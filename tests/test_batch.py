@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -518,3 +519,43 @@ def test_progress_bar_on_a_terminal_only(tmp_path, quiet):
     assert ("ok" in stdout) != quiet
     r = run(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "out2"), "--density", "sparse"])
     assert r.returncode == 0 and "mesh/s" not in r.stderr  # not a terminal: no bar
+
+
+def _unwritable_folder(tmp_path):
+    """An existing folder this process cannot write in: mode 555, or (root ignores modes) /sys/kernel."""
+    if os.geteuid() != 0:
+        folder = tmp_path / "locked"
+        folder.mkdir()
+        folder.chmod(0o555)
+        return folder
+    folder = "/sys/kernel"
+    if os.path.isdir(folder):
+        try:
+            fd, probe = tempfile.mkstemp(dir=folder)
+        except OSError:
+            return Path(folder)
+        os.close(fd)
+        os.unlink(probe)
+    pytest.skip("no folder this process cannot write in")
+
+
+@pytest.mark.parametrize("where", ["unwritable", "under_a_file"])
+def test_output_folder_it_cannot_write_is_refused_up_front(tmp_path, where):
+    """Checked before any file is rigged: one line naming the folder, exit 2 (was: every file failed,
+    then writing batch_report.json crashed with a traceback)."""
+    (tmp_path / "in").mkdir()
+    copy("misc/robot_head_neutral.obj", tmp_path / "in" / "robot.obj")
+    if where == "unwritable":
+        out = _unwritable_folder(tmp_path)
+    else:
+        (tmp_path / "file").write_text("a file, not a folder")
+        out = tmp_path / "file" / "out"
+    try:
+        r = run(["batch", str(tmp_path / "in"), "-o", str(out)])
+    finally:
+        if where == "unwritable" and str(out).startswith(str(tmp_path)):
+            out.chmod(0o755)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "cannot write" in lines[0] and str(out) in lines[0]
+    assert sorted(os.listdir(tmp_path / "in")) == ["robot.obj"]

@@ -100,3 +100,114 @@ def test_debug_shows_the_traceback(tmp_path):
     (tmp_path / "e.obj").write_bytes(b"")
     r = run(["place", str(tmp_path / "e.obj"), "--debug"], tmp_path)
     assert r.returncode != 0 and "Traceback" in r.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 13, bad input that got through: each one line naming the file, exit 2, nothing written
+
+def _one_line_error(r, *needles):
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "error" in lines[0] and all(n in lines[0] for n in needles), r.stderr
+    return lines[0]
+
+
+@pytest.mark.parametrize("seed", ["-5", "1.5", "abc"])
+def test_bad_seed_one_line_exit_2(tmp_path, seed):
+    r = run(["place", str(data("misc/robot_head_neutral.obj")), "--seed", seed, "-o", "x.glb"], tmp_path)
+    _one_line_error(r, "--seed", "whole number")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("seed", [-5, 1.5, "3", None, True])
+def test_library_refuses_a_bad_seed_with_its_error_type(seed):
+    import autobones
+
+    with pytest.raises(autobones.AutobonesError, match="random_state"):
+        autobones.place(data("misc/robot_head_neutral.obj"), random_state=seed)
+
+
+NEW_BAD = ["stray_triangle_1e9.obj", "stray_triangle_1e7.obj", "spike_1e3.obj", "spike_1e5.obj",
+           "collinear_strip.obj", "random_stl.stl", "random_off.off"]
+
+
+@pytest.mark.parametrize("name", NEW_BAD)
+def test_bad_mesh_named_in_one_line(tmp_path, name):
+    import bad_inputs
+
+    content, case = bad_inputs.mesh_cases()[name]
+    (tmp_path / name).write_bytes(content)
+    out = tmp_path / "out"
+    out.mkdir()
+    r = run(["place", name, "-o", str(out / "x.glb")], tmp_path)
+    line = _one_line_error(r, name)
+    assert case.needle in line.lower(), line
+    assert os.listdir(out) == [] and (tmp_path / name).read_bytes() == content
+
+
+@pytest.mark.parametrize("sidecar", ["x.rig.json", "x.weights.npz"])
+def test_a_folder_in_the_way_of_a_sidecar_leaves_nothing(tmp_path, sidecar):
+    """All or nothing: the folder is named, and neither the glb nor the other sidecar appears."""
+    (tmp_path / sidecar).mkdir()
+    r = run(["place", str(data("misc/robot_head_neutral.obj")), "-o", "x.glb", "--density", "sparse"], tmp_path)
+    _one_line_error(r, sidecar, "folder")
+    assert os.listdir(tmp_path) == [sidecar] and os.listdir(tmp_path / sidecar) == []
+
+
+@pytest.fixture(scope="module")
+def robot_glb(tmp_path_factory):
+    """The robot head as a plain glb mesh, its landmarks beside it, and a transferred rig of it."""
+    import trimesh
+
+    import autobones
+
+    folder = tmp_path_factory.mktemp("same")
+    V, F = autobones.load_mesh(data("misc/robot_head_neutral.obj"))
+    trimesh.Trimesh(V, F, process=False).export(folder / "a.glb")
+    shutil.copy(ROOT / "tests" / "landmarks" / "robot_head_neutral.landmarks.json", folder / "a.landmarks.json")
+    autobones.transfer(folder / "a.glb", folder / "a.landmarks.json").save(folder / "r.glb")
+    return folder
+
+
+@pytest.mark.parametrize("args,victim", [
+    (["place", "a.glb", "-o", "a.glb"], "a.glb"),
+    (["place", "a.glb", "-o", "link.glb"], "a.glb"),  # a symbolic link to the input
+    (["transfer", "a.glb", "--landmarks", "a.landmarks.json", "-o", "a.glb"], "a.glb"),
+    (["landmarks", "a.glb", "--from", "a.landmarks.json", "-o", "a.landmarks.json"], "a.landmarks.json"),
+    (["pose", "r.glb", "-o", "r.glb"], "r.glb"),
+])
+def test_output_never_replaces_the_input(tmp_path, robot_glb, args, victim):
+    for f in os.listdir(robot_glb):
+        shutil.copy(robot_glb / f, tmp_path / f)
+    os.symlink("a.glb", tmp_path / "link.glb")
+    before = {f: (tmp_path / f).read_bytes() for f in os.listdir(tmp_path)}
+    r = run(args, tmp_path)
+    _one_line_error(r, "is the input file", victim)
+    assert {f: (tmp_path / f).read_bytes() for f in os.listdir(tmp_path)} == before
+
+
+def _strict(text):
+    def refuse(token):
+        raise ValueError(f"not strict JSON: {token}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_sidecars_are_strict_json(tmp_path, robot_glb):
+    """place and transfer: the sidecar and the glb's JSON chunk parse with a strict reader (no NaN or
+    Infinity tokens); an undefined value is null and reads back (a transferred frame has no symmetry error)."""
+    import autobones
+    from autobones.io.gltf import read_glb
+
+    placed = autobones.place(robot_glb / "a.glb", density="sparse").save(tmp_path / "p.glb")
+    transferred = autobones.transfer(robot_glb / "a.glb", robot_glb / "a.landmarks.json").save(tmp_path / "t.glb")
+    for glb, side, _ in (placed, transferred):
+        _strict((tmp_path / side).read_text())
+        with open(glb, "rb") as fh:
+            blob = fh.read()
+        n = int.from_bytes(blob[12:16], "little")
+        _strict(blob[20:20 + n].decode())
+        read_glb(glb)
+    sym = _strict((tmp_path / "t.rig.json").read_text())["frame"]["symmetry_error"]
+    assert sym is None or np.isfinite(sym)
+    rig = autobones.load_rig(tmp_path / "t.glb")
+    assert rig.frame.symmetry_error == sym or (sym is None and np.isnan(rig.frame.symmetry_error))

@@ -132,3 +132,115 @@ def test_posed_mesh_refuses_other_formats(tmp_path):
     with pytest.raises(AutobonesError, match=r"\.obj or \.glb"):
         write_posed_mesh(tmp_path / "x.stl", np.zeros((3, 3)), [[0, 1, 2]])
     assert not (tmp_path / "x.stl").exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 13: bad input that got through
+
+@pytest.mark.parametrize("name,content", [
+    ("noise.stl", bytes(range(256)) * 16),
+    ("noise.off", bytes(range(256)) * 16),
+    ("solid_noise.stl", b"solid x\n" + bytes(range(128, 256)) * 64),
+    ("late_noise.off", b"OFF\n3 1 0\n" + b"# pad\n" * 1000 + bytes(range(128, 256)) * 40),
+])
+def test_garbage_stl_off_is_a_format_error_without_charset_normalizer(tmp_path, monkeypatch, name, content):
+    """trimesh guesses the encoding of non-UTF-8 text with an optional module; without it the reason
+    given was 'No module named charset_normalizer'. The loader says what is wrong with the file."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "charset_normalizer", None)  # as if not installed
+    p = tmp_path / name
+    p.write_bytes(content)
+    with pytest.raises(AutobonesError) as err:
+        load_mesh(p)
+    msg = str(err.value)
+    assert name in msg and "not a valid " + name[-3:].upper() in msg and "charset" not in msg and "Module" not in msg
+
+
+@pytest.mark.parametrize("ext", [".off", ".stl"])
+def test_valid_stl_off_still_load_without_charset_normalizer(tmp_path, monkeypatch, ext):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "charset_normalizer", None)
+    m = trimesh.creation.icosphere(2)
+    m.export(tmp_path / f"s{ext}")
+    V, F = load_mesh(tmp_path / f"s{ext}")
+    assert len(F) == len(m.faces)
+
+
+def _robot():
+    return load_mesh(data("misc/robot_head_neutral.obj"))
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e6])
+def test_outlier_rule_is_scale_free(scale):
+    """A spike reaching 2 sizes of the rest is refused at any unit; the head alone, and a spike of a
+    fifth of its size (a horn, an ear), are not."""
+    from autobones.io.mesh import check_mesh
+
+    V, F = _robot()
+    V = V * scale
+    size = np.ptp(V, axis=0).max()
+    check_mesh(V, F)
+    top = V[np.argmax(V[:, 1])]
+    for reach, ok in ((0.2, True), (2.0, False)):
+        W = np.vstack([V, top + [0.0, reach * size, 0.0]])
+        G = np.vstack([F, [[F[0, 0], F[0, 1], len(V)]]])
+        if ok:
+            check_mesh(W, G)
+        else:
+            with pytest.raises(AutobonesError, match="outlier.*vertex 1742"):
+                check_mesh(W, G, name="spiky")
+
+
+def test_degenerate_faces_refused_whatever_their_count():
+    from autobones.io.mesh import check_mesh
+
+    t = np.linspace(0, 1, 100)[:, None]
+    line = t * [0.3, 0.7, 0.9] + t ** 2 * 1e-15  # rounding-level bends only
+    F = [[i, i + 1, i + 2] for i in range(98)]
+    with pytest.raises(AutobonesError, match="zero area"):
+        check_mesh(line, F)
+
+
+def test_outputs_are_renamed_all_or_nothing(tmp_path, monkeypatch):
+    """A rename that fails in the middle puts back the files that were there and removes the new ones."""
+    import os
+
+    from autobones.io.atomic import replace_all, temp_beside
+
+    targets = [tmp_path / "x.glb", tmp_path / "x.rig.json", tmp_path / "x.weights.npz"]
+    for t in targets[:2]:
+        t.write_text("old " + t.name)
+    staged = []
+    for t in targets:
+        fd, tmp = temp_beside(t)
+        os.write(fd, b"new")
+        os.close(fd)
+        staged.append((tmp, t))
+    real = os.replace
+    calls = []
+
+    def flaky(src, dst):
+        calls.append(dst)
+        if str(dst) == str(targets[2]):
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", flaky)
+    with pytest.raises(AutobonesError, match="x.weights.npz: cannot write"):
+        replace_all(staged, "the rig")
+    monkeypatch.setattr(os, "replace", real)
+    assert sorted(os.listdir(tmp_path)) == ["x.glb", "x.rig.json"]
+    assert [t.read_text() for t in targets[:2]] == ["old x.glb", "old x.rig.json"]
+
+
+def test_strict_json_writes_null_for_undefined_values():
+    import json
+
+    from autobones.io.jsonable import strict_dumps
+
+    doc = {"a": float("nan"), "b": [1, np.float64(np.inf), (2.5, -np.inf)], "c": np.float64(0.1), "d": "NaN"}
+    text = strict_dumps(doc, indent=1)
+    assert json.loads(text) == {"a": None, "b": [1, None, [2.5, None]], "c": 0.1, "d": "NaN"}
+    assert strict_dumps({"x": [0.1, 2, "y"]}) == json.dumps({"x": [0.1, 2, "y"]})

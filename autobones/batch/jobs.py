@@ -10,6 +10,7 @@ import time
 import traceback
 
 from ..errors import AutobonesError
+from ..io.atomic import replace_all
 
 PARTIAL_SUFFIX = ".partial"
 
@@ -116,6 +117,9 @@ def rig_one(input_path, output_path, options):
               "options_hash": h, "landmarks": None, "host": socket.gethostname(), "pid": os.getpid()}
     partial = partial_dir(output_path)
     try:
+        for target in output_paths(output_path):  # before the work: a folder in the way names itself
+            if os.path.isdir(target):
+                raise AutobonesError(f"{target}: a folder of that name is in the way of the rig; move it")
         with _one_blas_thread():
             rig = _make_rig(input_path, options, record)
         rig.batch = {"options": options, "options_hash": h}
@@ -176,9 +180,9 @@ def _save_atomically(rig, output_path, partial, expressions=False):
         raise AutobonesError(f"{output_path}: cannot create the output folder ({exc.strerror or exc})") from exc
     staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions)
     glb, js, npz = output_paths(output_path)
+    # all three or none (a failed rename puts back what was there), the sidecar last: it marks the file done
+    replace_all(((staged[0], glb), (staged[2], npz), (staged[1], js)), "the rig")
     try:
-        for src, dst in ((staged[0], glb), (staged[2], npz), (staged[1], js)):
-            os.replace(src, dst)
         os.rmdir(partial)
     except OSError as exc:
         raise AutobonesError(f"{output_path}: cannot write ({exc.strerror or exc})") from exc

@@ -6,6 +6,7 @@ import os
 from dataclasses import dataclass, field
 
 from ..errors import AutobonesError
+from ..io.atomic import BACKUP_SUFFIX
 from ..io.mesh import SUPPORTED
 from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir
 
@@ -133,12 +134,13 @@ def _recorded_hash(sidecar):
 
 
 def clean_stale_temps(out):
-    """Remove what an interrupted run left behind: Rig.save's ``.autobones-*`` temporaries and
-    a half-written report. ``.partial`` folders are kept: they mark files to redo."""
+    """Remove what an interrupted run left behind: Rig.save's ``.autobones-*`` temporaries, the
+    backups of a group rename (``*.autobones-old``) and a half-written report. ``.partial`` folders are kept: they mark files to redo."""
     for root, dirs, files in os.walk(out):
         dirs[:] = [d for d in dirs if not d.endswith(PARTIAL_SUFFIX)]
         for name in files:
-            if name.startswith(".autobones-") or name.startswith(".batch_report-"):
+            if (name.startswith(".autobones-") or name.startswith(".batch_report-")
+                    or (name.startswith(".") and name.endswith(BACKUP_SUFFIX))):
                 try:
                     os.unlink(os.path.join(root, name))
                 except OSError:

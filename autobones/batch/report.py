@@ -1,10 +1,10 @@
 """The batch report (``batch_report.json``): records as the report shows them, writing it, the summary table."""
 from __future__ import annotations
 
-import json
 import os
 
 from ..io.atomic import write_text_atomic
+from ..io.jsonable import strict_dumps
 
 REPORT_NAME = "batch_report.json"
 REPORT_FORMAT = "autobones-batch-report/1"
@@ -36,7 +36,7 @@ def public_record(record, inp, out, options):
 
 def write_report(path, report):
     """Write the report as JSON through a temporary file renamed into place."""
-    write_text_atomic(path, json.dumps(report, indent=1) + "\n", "the batch report")
+    write_text_atomic(path, strict_dumps(report, indent=1) + "\n", "the batch report")
 
 
 def summary_table(report):

@@ -5,6 +5,7 @@ import os
 import time
 
 from ..errors import AutobonesError
+from ..io.atomic import probe_folder
 from .engines import run_dask, run_local
 from .jobs import options_hash, rig_one
 from .planning import check_folders, clean_stale_temps, plan
@@ -41,7 +42,7 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
     t0 = time.perf_counter()
     items = plan(input_dir, output_dir, options, force=force)
     inp, out = check_folders(input_dir, output_dir)
-    os.makedirs(out, exist_ok=True)
+    probe_folder(out)  # up front: a folder that cannot be written fails the command, not every file
     clean_stale_temps(out)
     h = options_hash(options)
     to_run = [it for it in items if it.action == "run"]

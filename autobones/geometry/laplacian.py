@@ -8,6 +8,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from ..errors import AutobonesError
+
 try:  # optional extra `autobones[cholmod]`: a supernodal Cholesky, faster again on large meshes
     from sksparse.cholmod import cholesky as _cholmod
 except ImportError:  # pragma: no cover - exercised when scikit-sparse is absent (the default install)
@@ -19,7 +21,10 @@ def laplacian(V, F):
     (n, n) diagonal, in mesh units (``M`` in squared units), as scipy sparse matrices."""
     import robust_laplacian
 
-    return robust_laplacian.mesh_laplacian(np.ascontiguousarray(V), np.ascontiguousarray(F))
+    try:
+        return robust_laplacian.mesh_laplacian(np.ascontiguousarray(V), np.ascontiguousarray(F))
+    except RuntimeError as exc:  # geometry-central's assertions (e.g. an unreferenced vertex)
+        raise AutobonesError(f"mesh: the surface Laplacian failed on this mesh ({exc})") from None
 
 
 ORDERINGS = {

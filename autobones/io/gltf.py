@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .jsonable import strict_dumps
+
 FLOAT, UBYTE, USHORT, UINT = 5126, 5121, 5123, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 
@@ -193,7 +195,7 @@ class GlbBuffer:
 
 def pack_glb(doc, body):
     """A binary glTF 2.0 file: 12-byte header, JSON chunk (space-padded), BIN chunk."""
-    js = json.dumps(doc, separators=(",", ":")).encode()
+    js = strict_dumps(doc, separators=(",", ":")).encode()  # JSON.parse in a browser rejects NaN
     js += b" " * (-len(js) % 4)
     total = 12 + 8 + len(js) + 8 + len(body)
     return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(js), b"JSON") + js

@@ -401,6 +401,11 @@ def resolve_landmarks(landmarks):
     return {k: np.asarray(v, dtype=np.float64) for k, v in dict(landmarks).items()}, "landmarks"
 
 
+def _json_number(x):
+    """``x`` as JSON: its shortest repr, or null when it is not finite (strict JSON has no NaN)."""
+    return repr(x) if np.isfinite(x) else "null"
+
+
 def write_landmarks(path, landmarks, mesh_name=None, confidence=None):
     """Write landmarks as contract JSON, atomically (a temporary file renamed into place).
 
@@ -432,7 +437,7 @@ def write_landmarks(path, landmarks, mesh_name=None, confidence=None):
     if confidence:
         lines.append("  },")
         lines.append('  "confidence": {')
-        lines.append(",\n".join(f"    {json.dumps(n)}: {round(float(confidence[n]), 3)!r}"
+        lines.append(",\n".join(f"    {json.dumps(n)}: {_json_number(round(float(confidence[n]), 3))}"
                                 for n in clean if n in confidence))
     lines.append("  }")
     lines.append("}")

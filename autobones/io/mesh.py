@@ -11,10 +11,12 @@ to process anything.
 from __future__ import annotations
 
 import os
+import struct
 
 import numpy as np
 
 from ..errors import AutobonesError
+from ..geometry.topology import used_vertices
 from .obj import read_obj
 
 SUPPORTED = (".obj", ".ply", ".off", ".stl", ".glb", ".gltf")
@@ -42,7 +44,8 @@ def load_mesh(path):
     ------
     AutobonesError
         Missing, empty, unreadable or unsupported file; no faces; NaN or
-        infinite coordinates; face indices out of range; a flat or tiny mesh.
+        infinite coordinates; face indices out of range; a flat or tiny mesh; an
+        outlier far from the rest (:data:`OUTLIER_REACH`); faces of (almost) zero area.
     """
     path = os.fspath(path)
     name = os.path.basename(path)
@@ -61,6 +64,8 @@ def load_mesh(path):
         if ext == ".obj":
             V, F = read_obj(path)
         else:
+            if ext in _SNIFF:
+                _SNIFF[ext](path, size)
             V, F = _read_trimesh(path)
     except AutobonesError:
         raise
@@ -68,6 +73,10 @@ def load_mesh(path):
         text = str(exc)
         if any(k in text for k in ("unexpected length", "reshape", "buffer is smaller", "truncated")):
             why = "the file is shorter than its header says: truncated or corrupt"
+        elif isinstance(exc, (UnicodeError, ImportError)):
+            # trimesh guesses the encoding of text that is not UTF-8 with an optional module:
+            # either way the file is not the text its format is
+            why = f"not a valid {ext[1:].upper()} file: its text is not readable"
         else:
             why = f"{exc.__class__.__name__}: {text}"
         raise AutobonesError(f"{path}: not a readable {ext[1:].upper()} mesh ({why})") from exc
@@ -130,7 +139,8 @@ def resolve_mesh(mesh):
 
 
 def check_mesh(V, F, name="mesh"):
-    """Validate plain arrays and return them as ``(float64 (n,3), int64 (m,3))``."""
+    """Validate plain arrays and return them as ``(float64 (n,3), int64 (m,3))``; AutobonesError
+    naming ``name`` for anything :func:`load_mesh` refuses after parsing."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
@@ -146,16 +156,107 @@ def check_mesh(V, F, name="mesh"):
             f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates (first: vertex {int(np.argmax(bad))})")
     if F.min() < 0 or F.max() >= len(V):
         raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}), file is corrupt")
-    used = np.unique(F)
-    extent = V[used].max(axis=0) - V[used].min(axis=0)
+    used = used_vertices(F, len(V))
     if len(F) < 4 or len(used) < 4:
         raise AutobonesError(f"{name}: only {len(F)} faces; a head needs a real surface")
+    _check_outliers(V, used, name)
+    extent = V[used].max(axis=0) - V[used].min(axis=0)
     if extent.max() <= 0 or extent.min() < 1e-4 * extent.max():
         raise AutobonesError(f"{name}: the mesh is flat (extent {extent.tolist()}); a head has volume")
-    area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-    if not (area > 0).any():
-        raise AutobonesError(f"{name}: every face has zero area")
+    _check_area(V, F, extent, name)
     return V, F
+
+
+# A few vertices far outside the rest (a stray vertex, a spike triangle, a part at 1e9) set the
+# bounding box, and with it the frame, the head size and every tolerance taken relative to it:
+# such a mesh is refused rather than rigged wrong. The rest is the box of the vertices with
+# OUTLIER_TRIM of them cut off at each end of each axis; a vertex farther outside that box than
+# OUTLIER_REACH times its largest side is an outlier. Both are fractions: the rule is scale-free.
+OUTLIER_TRIM = 0.005
+OUTLIER_REACH = 1.0
+
+# A triangle whose area is below DEGENERATE_AREA times its longest edge squared has its corners
+# on one line (up to rounding); a mesh whose total area is below MIN_AREA times its bounding-box
+# diagonal squared is a line or a point however many faces it has (a head's is about 0.5).
+DEGENERATE_AREA = 1e-10
+MIN_AREA = 1e-6
+
+
+def _check_outliers(V, used, name):
+    U = V[used]
+    lo, hi = np.quantile(U, OUTLIER_TRIM, axis=0), np.quantile(U, 1.0 - OUTLIER_TRIM, axis=0)
+    core = float((hi - lo).max())
+    if not core > 0:
+        return  # a flat or collapsed mesh: refused below, with its own message
+    outside = np.linalg.norm(np.maximum(lo - U, 0.0) + np.maximum(U - hi, 0.0), axis=1) / core
+    far = outside > OUTLIER_REACH
+    if far.any():
+        k = int(far.sum())
+        raise AutobonesError(
+            f"{name}: an outlier: {k} {'vertices lie' if k > 1 else 'vertex lies'} (first: vertex "
+            f"{int(used[np.argmax(far)])}) {outside.max():.3g} times the size of the rest of the mesh away from it "
+            f"(a stray vertex or a spike triangle) and would decide the head's size and frame; remove "
+            f"{'them' if k > 1 else 'it'} first")
+
+
+def _check_area(V, F, extent, name, chunk=65536):
+    # in chunks, stopping at the first chunk with a proper face: a million faces in well under a second
+    total, proper = 0.0, False
+    for s in range(0, len(F), chunk):
+        A, B, C = (V[F[s:s + chunk, i]] for i in range(3))
+        area2 = np.linalg.norm(np.cross(B - A, C - A), axis=1)
+        total += 0.5 * area2.sum()
+        if not proper:
+            edge2 = np.maximum(np.maximum(((B - A) ** 2).sum(axis=1), ((C - B) ** 2).sum(axis=1)),
+                               ((A - C) ** 2).sum(axis=1))
+            proper = bool((area2 > DEGENERATE_AREA * edge2).any())
+    if not proper:
+        raise AutobonesError(f"{name}: every face has zero area (its corners coincide or lie on one line)")
+    diag = float(np.linalg.norm(extent))
+    if total < MIN_AREA * diag ** 2:
+        raise AutobonesError(f"{name}: the faces have almost zero area ({total:.3g} in all, for a bounding box "
+                             f"{diag:.3g} across): a line or a sliver, not a surface")
+
+
+def _text_head(path, n=4096):
+    """The first ``n`` bytes of ``path`` as text, or None when they are not UTF-8 (a character
+    cut at the end is fine)."""
+    with open(path, "rb") as fh:
+        head = fh.read(n)
+    try:
+        return head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start >= len(head) - 3 and len(head) == n:
+            return head[:exc.start].decode("utf-8")
+        return None
+
+
+def _sniff_stl(path, size):
+    """AutobonesError unless ``path`` looks like a binary STL (its size matches its triangle count)
+    or an ASCII one (text starting with ``solid``); checked before trimesh, which would try to
+    decode random bytes as text."""
+    if size >= 84:
+        with open(path, "rb") as fh:
+            fh.seek(80)
+            (count,) = struct.unpack("<I", fh.read(4))
+        if size == 84 + 50 * count:
+            return
+    text = _text_head(path)
+    if text is None or not text.lstrip().lower().startswith("solid"):
+        raise AutobonesError(f"{path}: not a valid STL file (neither a binary STL whose size matches its "
+                             "triangle count nor ASCII text starting with 'solid')")
+
+
+def _sniff_off(path, size):
+    """AutobonesError unless ``path`` is text whose first word (after comments) is OFF or a
+    variant (COFF, NOFF, STOFF...)."""
+    text = _text_head(path)
+    words = None if text is None else " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    if not words or not words[0].upper().endswith("OFF"):
+        raise AutobonesError(f"{path}: not a valid OFF file (not text starting with an OFF header)")
+
+
+_SNIFF = {".stl": _sniff_stl, ".off": _sniff_off}
 
 
 def _read_trimesh(path):

@@ -122,8 +122,9 @@ def _read_sidecar(json_path):
         skeleton = Skeleton(names, [names.index(b["parent"]) if b["parent"] is not None else -1 for b in bones],
                             [b["head"] for b in bones], [b["tail"] for b in bones])
         fr = meta["frame"]
+        sym = fr.get("symmetry_error")  # null (or absent): undefined, e.g. a transferred rig's
         frame = Frame(np.asarray(fr["rotation"], dtype=np.float64), np.asarray(fr["origin"], dtype=np.float64),
-                      float(fr["head_size"]), float(fr.get("symmetry_error", float("nan"))))
+                      float(fr["head_size"]), float("nan") if sym is None else float(sym))
         defs = (meta.get("expressions") or {}).get("definitions")
         if defs is not None:
             if not isinstance(defs, dict):
