@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
 from .geometry.sample import sample_surface
+from .geometry.topology import used_vertices
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
@@ -184,7 +185,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     up_d /= np.linalg.norm(up_d)
     R = np.vstack([left, up_d, np.cross(left, up_d)])
     origin = center - ((center @ normal) - offset) * normal  # on the symmetry plane
-    used = np.unique(F)
+    used = used_vertices(F, len(V))
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
@@ -225,7 +226,7 @@ def _cut_cues(V, F):
     key = E[:, 0] * len(Vw) + E[:, 1]
     uniq, count = np.unique(key, return_counts=True)
     rim = np.column_stack([uniq[count == 1] // len(Vw), uniq[count == 1] % len(Vw)])
-    return {"centroid": T.mean(axis=1), "normal": normal, "area2": area2, "heights": V[np.unique(F)],
+    return {"centroid": T.mean(axis=1), "normal": normal, "area2": area2, "heights": V[used_vertices(F, len(V))],
             "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
             "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
 
@@ -281,9 +282,11 @@ def _top_part(Q):
     for _ in range(2):  # settle the width on the head, not on shoulders
         width = np.ptp(Q[y >= y.max() - band, 0])
         band = 0.6 * width
-    Q = Q[y >= y.max() - 1.2 * width]
+    top = Q[y >= y.max() - 1.2 * width]
+    # a lone spike above the head leaves a slice of almost nothing: then the whole set is the head
+    Q = top if width > 0 and len(top) >= 0.03 * len(Q) else Q
     Q = Q - Q.mean(axis=0)
-    return Q / np.sqrt((Q ** 2).sum(axis=1).mean())
+    return Q / max(np.sqrt((Q ** 2).sum(axis=1).mean()), 1e-300)
 
 
 def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
@@ -362,7 +365,7 @@ def frame_from_landmarks(V, F, landmarks):
     top, bottom, nose = pick(TOP), pick(BOTTOM), pick(FRONT)
     if top is None or bottom is None or nose is None:
         return None
-    used = np.unique(F)
+    used = used_vertices(F, len(V))
     centroid = V[used].mean(axis=0)
     up = top - bottom
     front = nose - centroid

@@ -14,14 +14,15 @@ import time
 
 import numpy as np
 
-from .facial_bones import bone_count, facial_bones
+from .facial_bones import bone_count, check_seed, facial_bones
 from ..io.mesh import resolve_mesh
+from ..geometry.proxy import mesh_proxy
 from ..orient import detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
 from .segment import segment_head
 from ..skeleton import Skeleton
-from .skin_weights import bone_heat_weights
+from .skin_weights import PROXY_VERTICES, WELD_TOL, bone_heat_weights
 
 log = logging.getLogger("autobones")
 
@@ -57,6 +58,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap, timings = watch.lap, watch.timings
 
     n_bones = bone_count(density)
+    random_state = check_seed(random_state)
     if landmarks is not None:
         return _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state)
     V, F, source = resolve_mesh(mesh)
@@ -65,16 +67,21 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     C = frame.to_canonical(V)
     log.info("frame: up %s, front %s, head size %.4g", frame.up, frame.front, frame.size)
     lap("orient")
-    seg = segment_head(C, F)
+    # one welded (and, for a dense scan, decimated) copy serves the inside tests, the closest
+    # surface points and the heat solve
+    proxy = mesh_proxy(C, F, PROXY_VERTICES, WELD_TOL)
+    lap("proxy")
+    seg = segment_head(C, F, volume=proxy.surface)
     lap("segment")
-    heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state)
+    heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state,
+                                       surface=proxy.surface)
     lap("facial")
     names = ["neck", "head"] + [f"face_{i:02d}" for i in range(n_bones)]
     parents = [-1, 0] + [1] * n_bones
     skel_c = Skeleton(names, parents,
                       np.vstack([seg.neck_bone[0], seg.head_bone[0], heads]),
                       np.vstack([seg.neck_bone[1], seg.head_bone[1], tails]))
-    W = bone_heat_weights(C, F, skel_c.segments)
+    W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy)
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}

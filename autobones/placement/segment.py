@@ -65,7 +65,7 @@ class HeadSegmentation:
         return _ordered_cut(self.linkage, self.sample_depth, n_groups)
 
 
-def segment_head(V, F, sample_count=4000, seed=0):
+def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     """Depth groups and head/neck bones of a head in the canonical frame.
 
     Parameters
@@ -76,6 +76,9 @@ def segment_head(V, F, sample_count=4000, seed=0):
         Triangles.
     sample_count : int
         Points clustered; memory is 4 * sample_count**2 bytes.
+    volume : (Vc, Fc), optional
+        A coarser copy of the same surface (canonical frame) for the inside tests that keep the
+        bones in the volume: winding numbers cost a tree over every triangle.
 
     Returns
     -------
@@ -107,10 +110,11 @@ def segment_head(V, F, sample_count=4000, seed=0):
     neck_root = neck_mean - (half / neck_dir[1]) * neck_dir
     # keep the bones inside the volume (horns, a long muzzle or shoulders can put the
     # geometric ends outside): pull each end toward its part's mean until it is inside
-    joint, head_tail, neck_root = _inside(V, F, np.array([joint, head_tail, neck_root]),
+    Vi, Fi = (V, F) if volume is None else volume
+    joint, head_tail, neck_root = _inside(Vi, Fi, np.array([joint, head_tail, neck_root]),
                                           np.array([head_mean, head_mean, neck_mean]))
     # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
-    shift = _inside_shift(V, F, [(joint, head_tail), (neck_root, joint)])
+    shift = _inside_shift(Vi, Fi, [(joint, head_tail), (neck_root, joint)])
     joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
     face_s = S[s_labels == FACE]
     level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]

@@ -21,15 +21,17 @@ unwelded faces), three choices keep this one working:
 - every vertex receives some heat (no visibility test), so each separate part
   (eyes, teeth) is solved from its own nearest bones and the system is never
   singular.
-One sparse LU factorisation serves all bones; nothing is n x n dense.
+One sparse LU factorisation serves all bones; nothing is n x n dense. Large meshes are
+solved on a quadric-decimated proxy and the weights interpolated back (see ``PROXY_VERTICES``).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..geometry.closest import closest_points
+from ..geometry.proxy import mesh_proxy
 from ..geometry.laplacian import factor_spd, laplacian
-from ..geometry.topology import weld
 from ..geometry.weights import prune_weights
 
 CHUNK = 65536
@@ -60,7 +62,15 @@ def segment_distances(P, segments):
     return out
 
 
-def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
+# Above this many (welded) vertices the heat system is solved on a decimated proxy and carried up:
+# the weights are smooth at a scale of many edges, and the exact solve grows faster than linearly
+# (factorisation fill; 45 s at 535k vertices against 4 s through the proxy, benchmarks/place.py).
+PROXY_VERTICES = 40000
+WELD_TOL = 1e-6  # canonical units (head sizes)
+
+
+def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, max_vertices=PROXY_VERTICES,
+                      proxy=None):
     """Skin weights of every vertex for every bone.
 
     Parameters
@@ -76,6 +86,16 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     prune : float
         Weights below this fraction of the vertex's largest weight are set to
         zero and the rest renormalised.
+    heat : float
+        Scale of the heat each vertex receives from its nearest bone.
+    max_vertices : int or None
+        Meshes with more welded vertices are solved on a quadric-decimated proxy of about
+        this many vertices (each connected part decimated on its own) and the weights
+        carried up barycentrically from each vertex's closest proxy point on its own part;
+        None always solves on the whole mesh.
+    proxy : MeshProxy, optional
+        :func:`autobones.geometry.proxy.mesh_proxy` of ``(V, F)`` when the caller has it
+        (``weld_tol`` and ``max_vertices`` are then its own).
 
     Returns
     -------
@@ -84,14 +104,28 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
         weights of the nearest referenced vertex.
     """
     segments = np.asarray(segments, dtype=np.float64)
-    Vw, Fw, index = weld(V, F, weld_tol)
-    used = np.zeros(len(Vw), dtype=bool)
-    used[Fw.ravel()] = True
-    remap = np.cumsum(used) - 1
-    Vu, Fu = Vw[used], remap[Fw]
+    if proxy is None:
+        proxy = mesh_proxy(V, F, max_vertices, weld_tol)
+    Vu, Fu = proxy.vertices, proxy.faces
+    Wu = _heat(Vu, Fu, segments, heat) if proxy.coarse is None else _carry_up(Vu, proxy.coarse, segments, heat)
+    if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp
+        Wu = prune_weights(Wu, prune)
+    loose = proxy.index < 0
+    if loose.any():  # loose vertices: the weights of the nearest surface vertex
+        from scipy.spatial import cKDTree
 
-    L, M = laplacian(Vu, Fu)
-    D = segment_distances(Vu, segments)
+        _, j = cKDTree(Vu).query(np.asarray(V, dtype=np.float64)[loose])
+        out = np.empty((len(V), len(segments)))
+        out[~loose] = Wu[proxy.index[~loose]]
+        out[loose] = Wu[j]
+        return out
+    return Wu[proxy.index]
+
+
+def _heat(V, F, segments, heat):
+    """Bone heat (n, b), rows summing to one, solved on the whole of a welded mesh (every vertex used)."""
+    L, M = laplacian(V, F)
+    D = segment_distances(V, segments)
     dmin = D.min(axis=1)
     scale = np.median(dmin[dmin > 0]) if (dmin > 0).any() else 1.0
     dmin = np.maximum(dmin, 1e-3 * scale)
@@ -103,17 +137,24 @@ def bone_heat_weights(V, F, segments, weld_tol=1e-6, prune=0.01, heat=1.0):
     A = A + sp.diags(np.where(mh > 0, 0.0, 1.0))
     rhs = mh[:, None] * Pn
     rhs[mh <= 0] = Pn[mh <= 0]
-    Wu = factor_spd(A)(rhs)
-    Wu = np.clip(Wu, 0.0, None)
-    Wu /= np.maximum(Wu.sum(axis=1, keepdims=True), 1e-300)
-    if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp
-        Wu = prune_weights(Wu, prune)
+    W = factor_spd(A)(rhs)
+    W = np.clip(W, 0.0, None)
+    W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
+    return W
 
-    Ww = np.empty((len(Vw), len(segments)))
-    Ww[used] = Wu
-    if (~used).any():  # loose vertices: the weights of the nearest surface vertex
-        from scipy.spatial import cKDTree
 
-        _, j = cKDTree(Vu).query(Vw[~used])
-        Ww[~used] = Wu[j]
-    return Ww[index]
+def _carry_up(V, coarse, segments, heat):
+    """Bone heat (n, b) solved on the decimated proxy ``coarse`` of ``V`` and interpolated at each
+    vertex's closest proxy point on the vertex's own part (so eyes and teeth keep their own weights)."""
+    Vp, Fp, part, face_part, kept = coarse
+    Wp = _heat(Vp, Fp, segments, heat)
+    W = np.empty((len(V), len(segments)))
+    whole = kept >= 0
+    W[whole] = Wp[kept[whole]]
+    rest = np.flatnonzero(~whole)
+    if len(rest):
+        _, face, bary, _ = closest_points(V[rest], Vp, Fp, labels=part[rest], face_labels=face_part)
+        corners = Fp[face]
+        W[rest] = (bary[:, 0:1] * Wp[corners[:, 0]] + bary[:, 1:2] * Wp[corners[:, 1]]
+                   + bary[:, 2:3] * Wp[corners[:, 2]])
+    return W
