@@ -25,7 +25,7 @@ Each run is a fresh worker process (``--worker``) calling ``autobones.place(path
   time (all threads); peak RSS is the worker's ``VmHWM`` when ``place`` returns (Python, numpy and
   the mesh included); runs shorter than 10 s are repeated (``--repeat``) and the fastest kept;
 - "exact": the same call with the decimated proxy switched off
-  (``autobones.placement.pipeline.PROXY_VERTICES = None``: the heat system, the inside tests and the
+  (``autobones.placement.pipeline.PROXY_ABOVE = None``: the heat system, the inside tests and the
   closest-point queries all on the full welded mesh), up to ``--exact-max`` vertices; the table gives
   its time, and the difference of the default result from it: the largest and the mean absolute
   weight difference over all vertices and bones, the 99.9th percentile of each vertex's largest
@@ -162,7 +162,7 @@ def worker_place(args):
     logger.addHandler(handler)
     logger.setLevel(logging.INFO)
     if args.exact:
-        autobones.placement.pipeline.PROXY_VERTICES = None
+        autobones.placement.pipeline.PROXY_ABOVE = None
     if not default_head_present():
         from autobones.io.mesh import load_mesh
 

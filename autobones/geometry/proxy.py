@@ -39,8 +39,6 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
     kept : (n,) int64
         Proxy vertex of each input vertex whose part was kept whole, else -1.
     """
-    import fast_simplification
-
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     n = len(V)
@@ -66,11 +64,20 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
         local = np.full(n, -1, dtype=np.int64)
         local[idx] = np.arange(len(idx))
         Fl = local[F[face_of == p]]
-        Vd, Fd = fast_simplification.simplify(V[idx], Fl.astype(np.int32), target_reduction=1.0 - ratio)
+        Vd, Fd = _simplify(V[idx], Fl, 1.0 - ratio)
         Vs.append(np.asarray(Vd, dtype=np.float64)), Fs.append(np.asarray(Fd, dtype=np.int64) + offset)
         labels.append(np.full(len(Fd), p, dtype=np.int64))
         offset += len(Vd)
     return np.concatenate(Vs), np.concatenate(Fs), part, np.concatenate(labels), kept
+
+
+def _simplify(V, F, reduction):
+    """``fast_simplification`` of one part (V (n, 3), F (m, 3)) by ``reduction`` of its triangles ->
+    (Vd, Fd int64). Not threaded: the library keeps its mesh in process-global arrays."""
+    import fast_simplification
+
+    Vd, Fd = fast_simplification.simplify(V, F.astype(np.int32), target_reduction=reduction)
+    return np.asarray(Vd, dtype=np.float64), np.asarray(Fd, dtype=np.int64)
 
 
 @dataclass
@@ -85,7 +92,7 @@ class MeshProxy:
         The welded mesh (every vertex used).
     coarse : tuple or None
         ``(Vp, Fp, part, face_part, kept)`` of :func:`decimate_parts` on the welded mesh, or None
-        when it has at most ``max_vertices`` vertices.
+        when it has at most ``above`` vertices.
     """
 
     index: np.ndarray
@@ -94,21 +101,22 @@ class MeshProxy:
     coarse: tuple = None
 
     @property
-    def surface(self):
-        """(V, F) to run inside tests and closest-point queries on: the coarse mesh when there is one."""
-        return self.coarse[:2] if self.coarse is not None else (self.vertices, self.faces)
+    def coarse_surface(self):
+        """(Vp, Fp) of the coarse mesh, or None when the mesh was small enough to keep."""
+        return None if self.coarse is None else self.coarse[:2]
 
 
-def mesh_proxy(V, F, max_vertices, weld_tol):
+def mesh_proxy(V, F, weld_tol, above=None, vertices=None):
     """Weld ``V`` (n, 3) / ``F`` (m, 3) at ``weld_tol`` (mesh units), drop unreferenced vertices, and
-    decimate (:func:`decimate_parts`) when more than ``max_vertices`` (None: never) remain.
-    Returns a :class:`MeshProxy`."""
-    Vw, Fw, index = weld(np.asarray(V, dtype=np.float64), F, weld_tol)
+    when more than ``above`` (None: never) remain, decimate to about ``vertices`` (default
+    ``above``) with :func:`decimate_parts`. Returns a :class:`MeshProxy`."""
+    V = np.asarray(V, dtype=np.float64)
+    Vw, Fw, index = weld(V, F, weld_tol)
     used = np.zeros(len(Vw), dtype=bool)
     used[Fw.ravel()] = True
     remap = np.where(used, np.cumsum(used) - 1, -1)
     Vu, Fu = Vw[used], remap[Fw]
     coarse = None
-    if max_vertices is not None and len(Vu) > max_vertices:
-        coarse = decimate_parts(Vu, Fu, max_vertices)
+    if above is not None and len(Vu) > above:
+        coarse = decimate_parts(Vu, Fu, vertices or above)
     return MeshProxy(index=remap[index], vertices=Vu, faces=Fu, coarse=coarse)

@@ -22,7 +22,7 @@ from ..rig import Rig
 from ..timing import Stopwatch
 from .segment import segment_head
 from ..skeleton import Skeleton
-from .skin_weights import PROXY_VERTICES, WELD_TOL, bone_heat_weights
+from .skin_weights import PROXY_ABOVE, PROXY_VERTICES, WELD_TOL, bone_heat_weights
 
 log = logging.getLogger("autobones")
 
@@ -65,16 +65,17 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
     C = frame.to_canonical(V)
-    log.info("frame: up %s, front %s, head size %.4g", frame.up, frame.front, frame.size)
     lap("orient")
-    # one welded (and, for a dense scan, decimated) copy serves the inside tests, the closest
-    # surface points and the heat solve
-    proxy = mesh_proxy(C, F, PROXY_VERTICES, WELD_TOL)
+    # one welded copy, decimated for a dense scan, serves the inside tests, the closest surface points
+    # and the heat solve; made in the canonical frame (head sizes) so the input's unit and axes do
+    # not change it
+    proxy = mesh_proxy(C, F, WELD_TOL, above=PROXY_ABOVE, vertices=PROXY_VERTICES)
+    coarse = proxy.coarse_surface
     lap("proxy")
-    seg = segment_head(C, F, volume=proxy.surface)
+    log.info("frame: up %s, front %s, head size %.4g", frame.up, frame.front, frame.size)
+    seg = segment_head(C, F, volume=coarse)
     lap("segment")
-    heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state,
-                                       surface=proxy.surface)
+    heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
     lap("facial")
     names = ["neck", "head"] + [f"face_{i:02d}" for i in range(n_bones)]
     parents = [-1, 0] + [1] * n_bones

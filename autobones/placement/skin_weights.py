@@ -62,14 +62,16 @@ def segment_distances(P, segments):
     return out
 
 
-# Above this many (welded) vertices the heat system is solved on a decimated proxy and carried up:
-# the weights are smooth at a scale of many edges, and the exact solve grows faster than linearly
-# (factorisation fill; 45 s at 535k vertices against 4 s through the proxy, benchmarks/place.py).
-PROXY_VERTICES = 40000
+# Above PROXY_ABOVE (welded) vertices the heat system is solved on a decimated proxy of about
+# PROXY_VERTICES and carried up: the weights are smooth at a scale of many edges, and the exact
+# solve grows faster than linearly (factorisation fill). Meshes up to PROXY_ABOVE (ICT's 26.7k,
+# the 53k template) are solved exactly, as before. Sizes and their error: benchmarks/place.py.
+PROXY_ABOVE = 60000
+PROXY_VERTICES = 25000
 WELD_TOL = 1e-6  # canonical units (head sizes)
 
 
-def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, max_vertices=PROXY_VERTICES,
+def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, max_vertices=PROXY_ABOVE,
                       proxy=None):
     """Skin weights of every vertex for every bone.
 
@@ -90,9 +92,9 @@ def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, m
         Scale of the heat each vertex receives from its nearest bone.
     max_vertices : int or None
         Meshes with more welded vertices are solved on a quadric-decimated proxy of about
-        this many vertices (each connected part decimated on its own) and the weights
-        carried up barycentrically from each vertex's closest proxy point on its own part;
-        None always solves on the whole mesh.
+        ``PROXY_VERTICES`` (each connected part decimated on its own) and the weights carried
+        up barycentrically from each vertex's closest proxy point on its own part; None always
+        solves on the whole mesh.
     proxy : MeshProxy, optional
         :func:`autobones.geometry.proxy.mesh_proxy` of ``(V, F)`` when the caller has it
         (``weld_tol`` and ``max_vertices`` are then its own).
@@ -105,11 +107,12 @@ def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, m
     """
     segments = np.asarray(segments, dtype=np.float64)
     if proxy is None:
-        proxy = mesh_proxy(V, F, max_vertices, weld_tol)
+        proxy = mesh_proxy(V, F, weld_tol, above=max_vertices, vertices=PROXY_VERTICES)
     Vu, Fu = proxy.vertices, proxy.faces
     Wu = _heat(Vu, Fu, segments, heat) if proxy.coarse is None else _carry_up(Vu, proxy.coarse, segments, heat)
     if prune > 0:  # heat has long thin tails: a facial bone should not tug at the scalp
-        Wu = prune_weights(Wu, prune)
+        for s in range(0, len(Wu), CHUNK):  # in place, a block at a time: no second (n, b) array
+            Wu[s:s + CHUNK] = prune_weights(Wu[s:s + CHUNK], prune)
     loose = proxy.index < 0
     if loose.any():  # loose vertices: the weights of the nearest surface vertex
         from scipy.spatial import cKDTree
@@ -119,11 +122,14 @@ def bone_heat_weights(V, F, segments, weld_tol=WELD_TOL, prune=0.01, heat=1.0, m
         out[~loose] = Wu[proxy.index[~loose]]
         out[loose] = Wu[j]
         return out
+    if len(Wu) == len(V) and np.array_equal(proxy.index, np.arange(len(V))):
+        return Wu  # nothing was welded (most scans): no copy
     return Wu[proxy.index]
 
 
-def _heat(V, F, segments, heat):
-    """Bone heat (n, b), rows summing to one, solved on the whole of a welded mesh (every vertex used)."""
+def _heat(V, F, segments, heat, ordering="colamd"):
+    """Bone heat (n, b), rows summing to one, solved on the whole of a welded mesh (every vertex used)
+    with :func:`~autobones.geometry.laplacian.factor_spd` and that ``ordering``."""
     L, M = laplacian(V, F)
     D = segment_distances(V, segments)
     dmin = D.min(axis=1)
@@ -137,7 +143,7 @@ def _heat(V, F, segments, heat):
     A = A + sp.diags(np.where(mh > 0, 0.0, 1.0))
     rhs = mh[:, None] * Pn
     rhs[mh <= 0] = Pn[mh <= 0]
-    W = factor_spd(A)(rhs)
+    W = factor_spd(A, ordering=ordering)(rhs)
     W = np.clip(W, 0.0, None)
     W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
     return W
@@ -147,7 +153,9 @@ def _carry_up(V, coarse, segments, heat):
     """Bone heat (n, b) solved on the decimated proxy ``coarse`` of ``V`` and interpolated at each
     vertex's closest proxy point on the vertex's own part (so eyes and teeth keep their own weights)."""
     Vp, Fp, part, face_part, kept = coarse
-    Wp = _heat(Vp, Fp, segments, heat)
+    # minimum degree in symmetric mode: on decimated meshes half COLAMD's fill and a 2-5x faster
+    # solve for all bones; its ordering step only blows up far above the proxy's size
+    Wp = _heat(Vp, Fp, segments, heat, ordering="mmd_symmetric" if len(Vp) <= PROXY_ABOVE else "colamd")
     W = np.empty((len(V), len(segments)))
     whole = kept >= 0
     W[whole] = Wp[kept[whole]]
@@ -155,6 +163,10 @@ def _carry_up(V, coarse, segments, heat):
     if len(rest):
         _, face, bary, _ = closest_points(V[rest], Vp, Fp, labels=part[rest], face_labels=face_part)
         corners = Fp[face]
-        W[rest] = (bary[:, 0:1] * Wp[corners[:, 0]] + bary[:, 1:2] * Wp[corners[:, 1]]
-                   + bary[:, 2:3] * Wp[corners[:, 2]])
+        for s in range(0, len(rest), CHUNK):  # a block at a time: no (n, 3, b) temporaries
+            c, b = corners[s:s + CHUNK], bary[s:s + CHUNK]
+            block = b[:, 0:1] * Wp[c[:, 0]]
+            block += b[:, 1:2] * Wp[c[:, 1]]
+            block += b[:, 2:3] * Wp[c[:, 2]]
+            W[rest[s:s + CHUNK]] = block
     return W
