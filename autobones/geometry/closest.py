@@ -2,6 +2,8 @@
 import igl
 import numpy as np
 
+from .topology import sorted_unique
+
 
 def barycentric(P, A, B, C):
     """Barycentric coordinates of points in their triangles.
@@ -75,7 +77,7 @@ def closest_points(P, V, F, labels=None, face_labels=None):
         face_labels = np.asarray(face_labels)
         groups = []
         anywhere = labels < 0
-        for g in np.unique(labels[labels >= 0]):
+        for g in sorted_unique(labels[labels >= 0]):
             fi = np.flatnonzero(face_labels == g)
             pi = np.flatnonzero(labels == g)
             if len(fi) == 0:
