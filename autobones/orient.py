@@ -154,7 +154,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             starts = list(np.eye(3))
         best = None
         for n0 in starts:
-            n, d = _refine_plane(P, tree, n0, center @ n0)
+            n, d = _refine_plane(P, tree, n0, center @ n0, rms)
             err = _mirror_error(P, tree, n, d)
             if best is None or err < best[0] - 1e-9 * rms:
                 best = (err, n, d)
@@ -252,7 +252,10 @@ def reflect(P, normal, offset):
     return P - 2.0 * (P @ normal - offset)[..., None] * normal
 
 
-def _refine_plane(P, tree, n, d, iterations=12):
+def _refine_plane(P, tree, n, d, scale, iterations=12):
+    """Reflective ICP of the plane ``n . x = d`` on points ``P``; ``scale`` (their RMS radius, mesh
+    units) makes the convergence test unit-free: an absolute one stopped the iterations at a
+    different step in millimetres than in metres, and the frame, hence the rig, moved with the unit."""
     for _ in range(iterations):
         mirrored = reflect(P, n, d)
         dist, j = tree.query(mirrored)
@@ -262,7 +265,7 @@ def _refine_plane(P, tree, n, d, iterations=12):
         w, U = np.linalg.eigh(diff.T @ diff)
         n_new = U[:, -1] * np.sign(U[:, -1] @ n or 1.0)
         d_new = float(mid.mean(axis=0) @ n_new)
-        if np.allclose(n_new, n, atol=1e-9) and abs(d_new - d) < 1e-12:
+        if np.allclose(n_new, n, atol=1e-9) and abs(d_new - d) < 1e-12 * scale:
             break
         n, d = n_new, d_new
     return n, d
