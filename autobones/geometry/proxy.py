@@ -29,7 +29,8 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
     Returns
     -------
     Vp : (k, 3) float64
-        Proxy vertices (``V`` itself when it already has at most ``max_vertices``).
+        Proxy vertices: the kept parts' vertices first (``V`` itself when every part is kept),
+        then each decimated part's.
     Fp : (mp, 3) int64
         Proxy triangles.
     part : (n,) int64
@@ -57,7 +58,9 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
         idx = np.flatnonzero(keep_v)
         kept[idx] = np.arange(len(idx))
         keep_f = whole[face_of]
-        Vs.append(V[idx]), Fs.append(kept[F[keep_f]]), labels.append(face_of[keep_f])
+        Vs.append(V[idx])
+        Fs.append(kept[F[keep_f]])
+        labels.append(face_of[keep_f])
         offset = len(idx)
     for p in np.flatnonzero(~whole):
         idx = np.flatnonzero(part == p)
@@ -65,7 +68,8 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
         local[idx] = np.arange(len(idx))
         Fl = local[F[face_of == p]]
         Vd, Fd = _simplify(V[idx], Fl, 1.0 - ratio)
-        Vs.append(np.asarray(Vd, dtype=np.float64)), Fs.append(np.asarray(Fd, dtype=np.int64) + offset)
+        Vs.append(Vd)
+        Fs.append(Fd + offset)
         labels.append(np.full(len(Fd), p, dtype=np.int64))
         offset += len(Vd)
     return np.concatenate(Vs), np.concatenate(Fs), part, np.concatenate(labels), kept
