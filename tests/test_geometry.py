@@ -76,13 +76,15 @@ def test_factor_spd_solves_and_agrees_with_colamd(ict):
     assert lap.factor_spd(A, use_cholmod=False)(b[:, 0]).shape == (len(V),)
 
 
-def test_factor_spd_uses_cholmod_when_it_is_installed(ict):
-    pytest.importorskip("sksparse.cholmod", reason="the [cholmod] extra (scikit-sparse) is not installed")
+def test_factor_spd_uses_cholmod_when_it_is_installed_and_superlu_otherwise(ict):
     V, F = ict
     L, M = lap.laplacian(V, F)
     A = (M + 1e-2 * L).tocsc()
     b = np.random.default_rng(1).standard_normal(len(V))
-    x, x_lu = lap.factor_spd(A)(b), lap.factor_spd(A, use_cholmod=False)(b)
+    solve = lap.factor_spd(A)
+    # the default install has no scikit-sparse: SuperLU's solve; with the [cholmod] extra, CHOLMOD's factor
+    assert (lap._cholmod is not None) == ("cholmod" in type(getattr(solve, "__self__", solve)).__module__)
+    x, x_lu = solve(b), lap.factor_spd(A, use_cholmod=False)(b)
     assert np.abs(x - x_lu).max() < 1e-10 * np.abs(x).max()
 
 
