@@ -39,7 +39,7 @@ from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
 from .geometry.sample import sample_surface
-from .geometry.topology import used_vertices
+from .geometry.topology import used_vertices, weld
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
@@ -215,13 +215,11 @@ def _cut_cues(V, F):
     """What a cut looks like, computed once: face centroids, unit normals and areas, and the
     open rim (edges with one face, after welding by position so unwelded meshes have none
     spurious) as midpoints and lengths."""
-    from .geometry.topology import weld
-
     T = V[F]
     cross = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
     area2 = np.linalg.norm(cross, axis=1)
     normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
-    Vw, Fw, _ = weld(V, F, 1e-7 * np.ptp(V[F].reshape(-1, 3), axis=0).max())
+    Vw, Fw, _ = weld(V, F, 1e-7 * np.ptp(T.reshape(-1, 3), axis=0).max())
     E = np.sort(np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]]), axis=1)
     key = E[:, 0] * len(Vw) + E[:, 1]
     uniq, count = np.unique(key, return_counts=True)

@@ -62,11 +62,17 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500):
         Fs.append(kept[F[keep_f]])
         labels.append(face_of[keep_f])
         offset = len(idx)
+    # vertices and faces grouped by part once (each vertex's index within its part), not one
+    # full-length mask per decimated part
+    by_part = np.argsort(part, kind="stable")
+    start = np.r_[0, np.cumsum(sizes)]
+    local = np.empty(n, dtype=np.int64)
+    local[by_part] = np.arange(n) - np.repeat(start[:-1], sizes)
+    faces_by_part = np.argsort(face_of, kind="stable")
+    face_start = np.r_[0, np.cumsum(np.bincount(face_of, minlength=len(sizes)))]
     for p in np.flatnonzero(~whole):
-        idx = np.flatnonzero(part == p)
-        local = np.full(n, -1, dtype=np.int64)
-        local[idx] = np.arange(len(idx))
-        Fl = local[F[face_of == p]]
+        idx = by_part[start[p]:start[p + 1]]
+        Fl = local[F[faces_by_part[face_start[p]:face_start[p + 1]]]]
         Vd, Fd = _simplify(V[idx], Fl, 1.0 - ratio)
         Vs.append(Vd)
         Fs.append(Fd + offset)
