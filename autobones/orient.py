@@ -38,6 +38,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
+from .geometry.normals import triangle_normals
 from .geometry.sample import sample_surface
 from .geometry.topology import used_vertices, weld
 
@@ -215,16 +216,17 @@ def _cut_cues(V, F):
     """What a cut looks like, computed once: face centroids, unit normals and areas, and the
     open rim (edges with one face, after welding by position so unwelded meshes have none
     spurious) as midpoints and lengths."""
-    T = V[F]
-    cross = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    cross = triangle_normals(V, F)
     area2 = np.linalg.norm(cross, axis=1)
     normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
-    Vw, Fw, _ = weld(V, F, 1e-7 * np.ptp(T.reshape(-1, 3), axis=0).max())
-    E = np.sort(np.concatenate([Fw[:, [0, 1]], Fw[:, [1, 2]], Fw[:, [2, 0]]]), axis=1)
-    key = E[:, 0] * len(Vw) + E[:, 1]
-    uniq, count = np.unique(key, return_counts=True)
-    rim = np.column_stack([uniq[count == 1] // len(Vw), uniq[count == 1] % len(Vw)])
-    return {"centroid": T.mean(axis=1), "normal": normal, "area2": area2, "heights": V[used_vertices(F, len(V))],
+    heights = V[used_vertices(F, len(V))]
+    Vw, Fw, _ = weld(V, F, 1e-6 * np.ptp(heights, axis=0).max())
+    # edge keys (low * n + high); an open-rim edge is one whose key occurs once
+    a, b = Fw.T.ravel(), Fw[:, [1, 2, 0]].T.ravel()
+    key = np.sort(np.minimum(a, b) * len(Vw) + np.maximum(a, b))
+    once = np.r_[True, key[1:] != key[:-1]] & np.r_[key[1:] != key[:-1], True]
+    rim = np.column_stack([key[once] // len(Vw), key[once] % len(Vw)])
+    return {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
             "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
             "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
 

@@ -63,3 +63,28 @@ def test_memory_is_bounded_by_the_sample_not_the_mesh():
     frame = detect_frame(V2, F2)
     seg = segment_head(frame.to_canonical(V2), F2)
     assert seg.linkage.shape == (3999, 4) and len(seg.labels) == len(V2)
+
+
+def test_average_linkage_1d_matches_scipy():
+    """The O(s log s) line merge tree gives scipy's average-linkage groups and merge distances."""
+    from scipy.cluster.hierarchy import linkage
+
+    from autobones.placement.segment import _ordered_cut, average_linkage_1d
+
+    rng = np.random.default_rng(3)
+    for ties, x in ((False, np.concatenate([rng.normal(0, 1, 600), rng.normal(4, 0.5, 600), rng.uniform(-3, 8, 300)])),
+                    (False, rng.random(1200) ** 3), (True, np.round(rng.random(800), 2))):
+        ref, Z = linkage(x[:, None], method="average"), average_linkage_1d(x)
+        assert Z.shape == ref.shape
+        assert (np.diff(Z[:, 2]) >= -1e-12).all()
+        if ties:  # equal gaps merge in either order, and the trees part: each group still an interval
+            for k in range(2, 8):
+                cut = _ordered_cut(Z, x, k)
+                for g in range(k):
+                    inside = (x >= x[cut == g].min()) & (x <= x[cut == g].max())
+                    assert (cut[inside] == g).all()
+            continue
+        np.testing.assert_array_equal(Z[:, 3], ref[:, 3])
+        np.testing.assert_allclose(Z[-50:, 2], ref[-50:, 2], rtol=0, atol=1e-12)
+        for k in range(2, 8):
+            np.testing.assert_array_equal(_ordered_cut(Z, x, k), _ordered_cut(ref, x, k))

@@ -1,10 +1,12 @@
 """Triangle and per-vertex areas of a triangle mesh."""
 import numpy as np
 
+from .normals import triangle_normals
+
 
 def triangle_areas(V, F):
     """``(m,)`` triangle areas, in squared mesh units."""
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    return 0.5 * np.linalg.norm(triangle_normals(V, F), axis=1)
 
 
 def vertex_areas(V, F):

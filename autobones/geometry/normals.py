@@ -12,7 +12,14 @@ def triangle_normals(V, F):
     F : (m, 3) int
         Triangles.
     """
-    return np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    a = V[F[:, 0]]
+    e1, e2 = V[F[:, 1]] - a, V[F[:, 2]] - a
+    # component by component: np.cross moves axes about and took 2.5x as long on scans
+    N = np.empty(np.broadcast_shapes(e1.shape, e2.shape), dtype=np.result_type(e1, e2))
+    N[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
+    N[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
+    N[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    return N
 
 
 def vertex_normals(V, F):

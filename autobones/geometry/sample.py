@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .areas import triangle_areas
+
 
 def sample_surface(V, F, count, seed=0):
     """Sample ``count`` points uniformly by area on the triangles ``F``.
@@ -37,7 +39,7 @@ def sample_surface(V, F, count, seed=0):
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
-    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    area = triangle_areas(V, F)
     cdf = np.cumsum(area)
     cdf /= cdf[-1]
     rng = np.random.default_rng(seed)

@@ -65,9 +65,19 @@ def weld(V, F, tol):
     key = np.round(V / tol).astype(np.int64)
     # cells in lexicographic order, each welded vertex the first input vertex of its cell (what
     # np.unique(key, axis=0) gives, without its slow sort of structured rows)
-    order = np.lexsort(key.T[::-1])
-    k = key[order]
-    new_cell = np.r_[True, (k[1:] != k[:-1]).any(axis=1)] if len(k) else np.zeros(0, dtype=bool)
+    lo = key.min(axis=0) if len(key) else np.zeros(3, dtype=np.int64)
+    span = (key.max(axis=0) - lo + 1) if len(key) else np.ones(3, dtype=np.int64)
+    if int(span[0]) * int(span[1]) * int(span[2]) < 2 ** 62:
+        # one int64 per cell in the same lexicographic order: a stable argsort of it is the
+        # lexsort's order at a third of its cost on a scan
+        cell = ((key[:, 0] - lo[0]) * span[1] + (key[:, 1] - lo[1])) * span[2] + (key[:, 2] - lo[2])
+        order = np.argsort(cell, kind="stable")
+        c = cell[order]
+        new_cell = np.r_[True, c[1:] != c[:-1]] if len(c) else np.zeros(0, dtype=bool)
+    else:
+        order = np.lexsort(key.T[::-1])
+        k = key[order]
+        new_cell = np.r_[True, (k[1:] != k[:-1]).any(axis=1)] if len(k) else np.zeros(0, dtype=bool)
     first = order[new_cell]
     index = np.empty(len(V), dtype=np.int64)
     index[order] = np.cumsum(new_cell) - 1

@@ -16,6 +16,7 @@ import struct
 import numpy as np
 
 from ..errors import AutobonesError
+from ..geometry.normals import triangle_normals
 from ..geometry.topology import used_vertices
 from .obj import read_obj
 
@@ -204,7 +205,7 @@ def _check_area(V, F, extent, name, chunk=65536):
     total, proper = 0.0, False
     for s in range(0, len(F), chunk):
         A, B, C = (V[F[s:s + chunk, i]] for i in range(3))
-        area2 = np.linalg.norm(np.cross(B - A, C - A), axis=1)
+        area2 = np.linalg.norm(triangle_normals(V, F[s:s + chunk]), axis=1)
         total += 0.5 * area2.sum()
         if not proper:
             edge2 = np.maximum(np.maximum(((B - A) ** 2).sum(axis=1), ((C - B) ** 2).sum(axis=1)),

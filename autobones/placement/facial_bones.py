@@ -123,34 +123,57 @@ class FacialBones:
         k = self.n_bones
         centers, partner = [], []
         d2 = np.full(len(X), np.inf)
+        Xt = np.ascontiguousarray(X.T)
         while len(centers) < k:
             p = w * np.where(np.isinf(d2), 1.0, d2)
-            # greedy k-means++: the best of a few candidates by the error they leave
+            # greedy k-means++: the best of a few candidates by the error they leave; the
+            # candidates' distances in one array
             trials = rng.choice(len(X), size=min(len(X), 2 + int(np.log(k + 1))), p=p / p.sum())
-            best = None
+            news = []
             for t in trials:
                 c = X[t].copy()
-                new = [c]
                 if self.symmetric and (abs(c[0]) < self.midline_width or len(centers) == k - 1):
                     c[0] = 0.0
+                    news.append([c])
                 elif self.symmetric:
-                    new.append(c * MIRROR)
-                nd2 = d2
-                for q in new:
-                    nd2 = np.minimum(nd2, ((X - q) ** 2).sum(axis=1))
-                cost = (w * nd2).sum()
-                if best is None or cost < best[0]:
-                    best = (cost, new, nd2)
-            _, new, d2 = best
+                    news.append([c, c * MIRROR])
+                else:
+                    news.append([c])
+            Q = np.array([q for new in news for q in new])
+            D = (Xt[0] - Q[:, 0:1]) ** 2  # coordinate by coordinate: a sum over a length-3 axis is slow
+            D += (Xt[1] - Q[:, 1:2]) ** 2
+            D += (Xt[2] - Q[:, 2:3]) ** 2
+            first = np.cumsum([0] + [len(new) for new in news])
+            ND = np.minimum(d2, D[first[:-1]])
+            two = np.array([len(new) == 2 for new in news])
+            ND[two] = np.minimum(ND[two], D[first[:-1][two] + 1])
+            cost = (w * ND).sum(axis=1)
+            b = int(np.argmin(cost))  # the first of equal costs, as a strict running minimum
+            new, d2 = news[b], ND[b]
             i = len(centers)
             centers.extend(new)
             partner.extend([i] if len(new) == 1 else [i + 1, i])
         return np.array(centers), np.array(partner)
 
     def _lloyd(self, X, w, C, partner):
-        labels = None
+        # Hamerly's (2010) bounds skip the points whose centre cannot have changed; the labels,
+        # hence every centre, are exactly those of plain Lloyd iterations
+        Xt = np.ascontiguousarray(X.T)
+        margin = 1e-7 * np.sqrt((X ** 2).sum(axis=1).max())
+        labels, shift = None, None
         for _ in range(self.max_iter):
-            new_labels = _nearest(X, C)
+            if labels is None:
+                new_labels, upper, lower = _assign(Xt, C, np.arange(len(X)))
+            else:
+                new_labels = labels.copy()
+                upper = upper + shift[labels]
+                lower = lower - shift.max()
+                gap = np.sqrt(_pair_sq_dists(C))
+                np.fill_diagonal(gap, np.inf)
+                bound = np.maximum(0.5 * gap.min(axis=1)[labels], lower)
+                check = np.flatnonzero(upper + margin >= bound)
+                if len(check):
+                    new_labels[check], upper[check], lower[check] = _assign(Xt, C, check)
             if labels is not None and np.array_equal(new_labels, labels):
                 break
             labels = new_labels
@@ -162,12 +185,38 @@ class FacialBones:
                 Sp = S + (S[partner] * MIRROR) * (partner != np.arange(len(C)))[:, None]
                 W, S = Wp, Sp
             empty = W <= 0
-            C = np.where(empty[:, None], C, S / np.maximum(W, 1e-300)[:, None])
+            C_new = np.where(empty[:, None], C, S / np.maximum(W, 1e-300)[:, None])
             if self.symmetric:
-                C[partner == np.arange(len(C)), 0] = 0.0
+                C_new[partner == np.arange(len(C)), 0] = 0.0
+            shift = np.sqrt(((C_new - C) ** 2).sum(axis=1))
+            C = C_new
         labels = _nearest(X, C)
         inertia = float((w * ((X - C[labels]) ** 2).sum(axis=1)).sum())
         return C, labels, inertia
+
+
+def _pair_sq_dists(C):
+    """(c, c) squared distances between centres."""
+    return ((C[:, None, :] - C[None, :, :]) ** 2).sum(axis=2)
+
+
+def _assign(Xt, C, rows):
+    """Nearest centre of the points ``Xt[:, rows]`` (``Xt`` (3, k) transposed points, ``C`` (c, 3))
+    with the distance to it and to the second nearest: the first minimum of squared distances summed
+    x, y, z in that order, as scipy's vector quantiser picks it."""
+    P = Xt[:, rows]
+    D = (P[0] - C[:, 0:1]) ** 2
+    D += (P[1] - C[:, 1:2]) ** 2
+    D += (P[2] - C[:, 2:3]) ** 2
+    lab = np.argmin(D, axis=0)
+    cols = np.arange(len(rows))
+    best = D[lab, cols]
+    if len(C) > 1:
+        D[lab, cols] = np.inf
+        second = D.min(axis=0)
+    else:
+        second = np.full(len(rows), np.inf)
+    return lab.astype(np.int64), np.sqrt(best), np.sqrt(second)
 
 
 def _nearest(X, C):

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.cluster.hierarchy import fcluster
 
 from ..geometry.sample import sample_surface
 
@@ -86,12 +86,12 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     """
     S, _, _ = sample_surface(V, F, sample_count, seed=seed)
     depth = S[:, 2]
-    Z = linkage(depth[:, None], method="average")
+    Z = average_linkage_1d(depth)
     s_labels = _ordered_cut(Z, depth, 3)
     labels = _carry(depth, s_labels, V[:, 2]).astype(np.int8)
 
     mid = S[s_labels == MIDDLE]
-    Zm = linkage(mid[:, 1:2], method="average")
+    Zm = average_linkage_1d(mid[:, 1])
     # order the two height groups so 0 is the upper part
     up_low = _ordered_cut(Zm, mid[:, 1], 2)
     upper, lower = mid[up_low == 0], mid[up_low == 1]
@@ -130,6 +130,65 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
         labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
         linkage=Z, sample_depth=depth, neck_height=float(neck_height),
         head_bone=np.array([joint, head_tail]), neck_bone=np.array([neck_root, joint]))
+
+
+def average_linkage_1d(x):
+    """Average-linkage merge tree of scalars, in scipy's ``linkage`` format, in O(s log s).
+
+    On a line every average-linkage merge joins two neighbouring intervals (the mean distance
+    between intervals A < B < C is the sum of A-B's and B-C's), and the mean distance between
+    intervals is the difference of their means; so a heap of neighbour gaps replaces scipy's
+    O(s^2) pairwise matrix (0.3 s per 4000 points, most of ``segment``). The same tree as
+    ``scipy.cluster.hierarchy.linkage(x[:, None], "average")`` up to rounding.
+
+    Parameters
+    ----------
+    x : (s,) float
+
+    Returns
+    -------
+    Z : (s - 1, 4) float
+        Rows ``[cluster a, cluster b, distance, size]``, clusters ``0..s-1`` the points and
+        ``s + i`` the merge of row ``i``, distances non-decreasing.
+    """
+    import heapq
+
+    x = np.asarray(x, dtype=np.float64)
+    s = len(x)
+    order = np.argsort(x, kind="stable")
+    # intervals as a doubly linked list over sorted positions, keyed by their first position
+    total, count = x[order].tolist(), [1] * s
+    ident = order.tolist()
+    nxt, prv = list(range(1, s + 1)), list(range(-1, s - 1))
+    alive, version = [True] * s, [0] * s
+    heap = [(total[i + 1] - total[i], i, i + 1, 0, 0) for i in range(s - 1)]
+    heapq.heapify(heap)
+    Z = np.empty((max(s - 1, 0), 4))
+    row = 0
+    while heap:
+        d, a, b, va, vb = heapq.heappop(heap)
+        if not (alive[a] and alive[b]) or nxt[a] != b or version[a] != va or version[b] != vb:
+            continue  # a gap to an interval that has grown since
+        ia, ib = ident[a], ident[b]
+        Z[row] = (min(ia, ib), max(ia, ib), d, count[a] + count[b])
+        total[a] += total[b]
+        count[a] += count[b]
+        ident[a] = s + row
+        version[a] += 1
+        row += 1
+        alive[b] = False
+        nxt[a] = nxt[b]
+        if nxt[a] < s:
+            prv[nxt[a]] = a
+        mean = total[a] / count[a]
+        # the merged interval's gaps to both neighbours (its older gaps are now stale)
+        if prv[a] >= 0:
+            p = prv[a]
+            heapq.heappush(heap, (max(mean - total[p] / count[p], 0.0), p, a, version[p], version[a]))
+        if nxt[a] < s:
+            q = nxt[a]
+            heapq.heappush(heap, (max(total[q] / count[q] - mean, 0.0), a, q, version[a], version[q]))
+    return Z
 
 
 def _winding(V, F, Q):
