@@ -7,7 +7,9 @@ import trimesh
 import autobones
 import autobones.placement.pipeline as pipeline
 import autobones.placement.skin_weights as skin_weights
-from autobones.geometry.proxy import decimate_parts, mesh_proxy
+from autobones.geometry.areas import triangle_areas
+from autobones.geometry.closest import closest_points
+from autobones.geometry.proxy import cluster_vertices, decimate_parts, mesh_proxy
 from autobones.geometry.topology import mesh_parts
 from autobones.io.mesh import load_mesh
 from autobones.placement.skin_weights import bone_heat_weights
@@ -28,7 +30,11 @@ def dense_head():
     return np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
 
 
-def test_decimate_parts_keeps_every_part(ict):
+@pytest.mark.parametrize("precluster", [8, 1.5])  # 1.5: the large parts are vertex-clustered first
+def test_decimate_parts_keeps_every_part(ict, precluster, monkeypatch):
+    import autobones.geometry.proxy as proxy_module
+
+    monkeypatch.setattr(proxy_module, "PRECLUSTER", precluster)
     V, F = ict
     proxy = mesh_proxy(V, F, 1e-6 * np.ptp(V, axis=0).max())
     Vp, Fp, part, face_part, kept = decimate_parts(proxy.vertices, proxy.faces, 8000, min_part_vertices=200)
@@ -43,6 +49,21 @@ def test_decimate_parts_keeps_every_part(ict):
     whole = kept >= 0
     assert whole.any() and not whole.all()
     np.testing.assert_array_equal(Vp[kept[whole]], proxy.vertices[whole])
+
+
+def test_cluster_vertices_keeps_the_surface(dense_head):
+    V, F = dense_head
+    Vc, Fc = cluster_vertices(V, F, 8000)
+    assert 0.7 * 8000 <= len(Vc) <= 1.3 * 8000
+    assert set(np.unique(Fc)) == set(range(len(Vc)))  # every vertex used
+    assert ((Fc[:, 0] != Fc[:, 1]) & (Fc[:, 1] != Fc[:, 2]) & (Fc[:, 0] != Fc[:, 2])).all()
+    assert len(np.unique(np.sort(Fc, axis=1), axis=0)) == len(Fc)  # no repeated triangle
+    size = np.ptp(V, axis=0).max()
+    assert abs(triangle_areas(Vc, Fc).sum() / triangle_areas(V, F).sum() - 1) < 0.05
+    # every input vertex near the clustered surface: within a cell (about the new edge length)
+    *_, d2 = closest_points(V, Vc, Fc)
+    cell = np.sqrt(triangle_areas(V, F).sum() / 8000)
+    assert np.sqrt(d2.max()) < cell and np.sqrt(d2).mean() < 0.01 * size
 
 
 def test_mesh_proxy_maps_every_input_vertex():
