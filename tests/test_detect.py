@@ -137,6 +137,25 @@ def test_one_view_still_gives_every_name(ict):
     assert len(err) == 27 and np.mean(list(err.values())) < 6.0, err
 
 
+def test_a_dense_scan_is_pictured_from_a_coarser_copy(ict, monkeypatch):
+    """Above PICTURE_ABOVE vertices the pictures come from a vertex-clustered copy (here forced on
+    ICT's 26.7k by lowering the threshold): the landmarks stay as accurate and on the full skin."""
+    import autobones.landmarks.views as views
+    from autobones.geometry.closest import closest_points
+
+    V, F, truth, _ = ict
+    monkeypatch.setattr(views, "PICTURE_ABOVE", 10000)
+    monkeypatch.setattr(views, "PICTURE_VERTICES", 8000)
+    Vp, Fp = views.pictured_mesh(V, F)
+    assert len(Vp) < 0.5 * len(V)
+    found = LandmarkDetector().detect(V, F)
+    err = errors(found, truth)
+    assert len(err) >= 25 and np.mean(list(err.values())) < 4.0 and max(err.values()) < 10.0, err
+    P = np.array([found[n] for n in found])
+    *_, d2 = closest_points(P, V, F)
+    assert np.sqrt(d2).max() < 1e-9 * np.ptp(V, axis=0).max()  # on the input's own surface
+
+
 def test_scan_landmarks_match_the_published_ones():
     path = data("menpo3d/james.obj")
     found = autobones.detect_landmarks(str(path))

@@ -129,3 +129,20 @@ def test_mesh_arrays_refuse_bad_arrays_with_one_message(V, F, words):
         mesh_arrays(V, F, "head")
     if words == "shape" and len(np.asarray(F)) == 0:
         assert mesh_arrays(V, F, allow_no_faces=True)[1].shape == (0, 3)
+
+
+def test_closest_points_for_a_few_points_search_only_the_triangles_near_them():
+    """Few queries on a large mesh take the near-triangle path; the answer is the full search's."""
+    import autobones.geometry.closest as closest
+
+    V, F = icosphere(5)
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(12, 3)) * rng.uniform(0.2, 2.0, (12, 1))
+    C, face, bary, d2 = closest.closest_points(P, V, F)
+    assert 12 * closest.FEW < len(F)  # the near path ran
+    near = closest.near_faces(P, V, F)
+    assert len(near) < len(F) and np.isin(face, near).all()
+    Cf, _, _, d2f = closest._closest(P, V, F)
+    np.testing.assert_allclose(d2, d2f, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(C, Cf, rtol=0, atol=1e-12)
+    np.testing.assert_allclose((bary[:, :, None] * V[F[face]]).sum(axis=1), C, atol=1e-12)

@@ -36,6 +36,31 @@ def barycentric(P, A, B, C):
     return W / W.sum(axis=1, keepdims=True)
 
 
+FEW = 256
+
+
+def near_faces(P, V, F):
+    """Indices (k,) of the triangles of ``F`` (m, 3) on ``V`` (n, 3) that may hold the closest
+    surface point of one of ``P`` (p, 3): the closest triangle lies no farther than the nearest
+    vertex (distance d), so each of its corners lies within d plus the longest edge."""
+    from scipy.spatial import cKDTree
+
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    ids = np.flatnonzero(used)
+    tree = cKDTree(V[ids])
+    d, _ = tree.query(P)
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    longest = np.sqrt(max(((A - B) ** 2).sum(axis=1).max(), ((B - C) ** 2).sum(axis=1).max(),
+                          ((C - A) ** 2).sum(axis=1).max()))
+    hits = tree.query_ball_point(P, d * (1 + 1e-9) + longest * (1 + 1e-9))
+    mark = np.zeros(len(V), dtype=bool)
+    mark[ids[np.concatenate([np.asarray(h, dtype=np.int64) for h in hits])]] = True
+    return np.flatnonzero(mark[F].any(axis=1))
+
+
 def closest_points(P, V, F, labels=None, face_labels=None):
     """Closest point of a triangle mesh to each query point.
 
@@ -66,6 +91,16 @@ def closest_points(P, V, F, labels=None, face_labels=None):
         Squared distances, in squared mesh units.
     """
     P = np.ascontiguousarray(P, dtype=np.float64)
+    if (labels is None or face_labels is None) and 0 < len(P) * FEW < len(F):
+        # a few points on a large mesh (landmarks on a scan): an AABB tree over every triangle
+        # costs more than the queries; only triangles that can hold a closest point are searched
+        near = near_faces(P, V, F)
+        C, face, bary, sqrd = _closest(P, V, np.asarray(F)[near])
+        return C, near[face], bary, sqrd
+    return _closest(P, V, F, labels, face_labels)
+
+
+def _closest(P, V, F, labels=None, face_labels=None):
     n = len(P)
     C = np.empty((n, 3))
     face = np.empty(n, dtype=np.int64)

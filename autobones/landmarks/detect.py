@@ -48,7 +48,7 @@ from ..render.raster import rasterize, shade, surface_points
 from .mediapipe import MEDIAPIPE_POINTS, MediaPipeFaceMesh, quiet_stderr
 from .orientation import face_axes, nose_forward, plausible, squared_frame, turn_degrees, turns
 from .refine import refine
-from .views import face_camera, lift, skin_faces, view_direction, weighted_median
+from .views import face_camera, lift, pictured_mesh, skin_faces, view_direction, weighted_median
 
 #: Default views: (yaw, pitch) in degrees; yaw turns the camera toward the subject's
 #: left, pitch raises it.
@@ -156,12 +156,19 @@ class LandmarkDetector:
         V = np.asarray(V, dtype=np.float64)
         F = np.asarray(F, dtype=np.int64)
         frame = detect_frame(V, F) if frame is None else frame
+        # the frame from the whole mesh: a clustered copy's rim and flat cut read differently
+        Vp, Fp = pictured_mesh(V, F)
         detector = self.detector if self.detector is not None else MediaPipeFaceMesh()
         # MediaPipe's graph threads log to file descriptor 2 while they work
         quiet = quiet_stderr() if isinstance(detector, MediaPipeFaceMesh) else contextlib.nullcontext()
         with quiet:
             skin = skin_faces(V, F)             # the same in every frame the loop below tries
-            found = self._detect(V, F, skin, frame, detector, what, search=self.search)
+            snap = None                         # the pictured skin itself
+            if Vp is not V:
+                snap = (V, F if skin.all() else F[skin])
+                skin = skin_faces(Vp, Fp)
+            V, F = Vp, Fp
+            found = self._detect(V, F, skin, frame, detector, what, search=self.search, snap=snap)
             # a face turned away from the frame's front (a head turned in its file, a face-only
             # scan): look again, square to the face the landmarks describe
             for _ in range(3):          # a face first found from far off its front converges
@@ -169,7 +176,7 @@ class LandmarkDetector:
                 if turn_degrees(again.rotation, found.frame.rotation) <= self.max_turn:
                     break
                 try:
-                    found = self._detect(V, F, skin, again, detector, what, search=False)
+                    found = self._detect(V, F, skin, again, detector, what, search=False, snap=snap)
                 except NoFaceError:
                     break               # keep what the first pictures gave
         if not plausible(found):
@@ -219,7 +226,7 @@ class LandmarkDetector:
             return M, P0
         raise NoFaceError(NO_FACE.format(what=what))
 
-    def _detect(self, V, F, skin, frame, detector, what, search):
+    def _detect(self, V, F, skin, frame, detector, what, search, snap):
         Vc = frame.to_canonical(V)
 
         # 1. find the face on a whole-head picture and turn the frame to face it
@@ -281,10 +288,11 @@ class LandmarkDetector:
         dev = np.linalg.norm(Xn - comb[None], axis=2) / unit_c          # (v, k)
         dev = np.where(wn > 0, dev, np.nan)
         spread = np.nanmedian(dev, axis=0) if len(cands) > 1 else np.zeros(len(names))
-        return self._finish(V, Fs, Vc, frame, names, comb, spread, unit_c, view_info)
+        return self._finish(Fs, Vc, frame, names, comb, spread, unit_c, view_info, snap)
 
-    def _finish(self, V, F, Vc, frame, names, comb, spread, unit_c, view_info):
-        """Drop, refine and snap onto the triangles ``F`` (the skin)."""
+    def _finish(self, F, Vc, frame, names, comb, spread, unit_c, view_info, snap):
+        """Drop, refine on the triangles ``F`` (the pictured skin), and snap onto it, or onto
+        ``snap`` (the input's vertices and skin triangles) when the pictures were of a coarser copy."""
         points = {n: comb[i] for i, n in enumerate(names) if np.all(np.isfinite(comb[i]))}
         dropped, flagged, confidence = {}, {}, {}
         for i, n in enumerate(names):
@@ -302,8 +310,10 @@ class LandmarkDetector:
                     del dropped[n]
                     confidence[n] = 0.5 * confidence[mirror_name(n)]
         P = np.array([points[n] for n in points])
-        P = closest_points(P, Vc, F)[0]
-        Pin = frame.from_canonical(P)
+        if snap is None:
+            Pin = frame.from_canonical(closest_points(P, Vc, F)[0])
+        else:
+            Pin = closest_points(frame.from_canonical(P), *snap)[0]
         ordered = {n: Pin[i] for i, n in enumerate(points)}
         ordered = {n: ordered[n] for n in NAMES if n in ordered}
         return DetectedLandmarks(ordered, confidence, dropped, flagged, view_info, frame,

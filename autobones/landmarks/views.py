@@ -11,6 +11,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.areas import triangle_areas
+from ..geometry.proxy import decimate_parts, mesh_proxy
 from ..geometry.topology import mesh_parts, weld
 from ..render.camera import Camera, look_at
 
@@ -27,6 +28,40 @@ def face_camera(target, view_dir, width, size):
     units across the picture, ``size`` pixels square; world +Y shows upward."""
     view = look_at(np.asarray(target) + 4.0 * np.asarray(view_dir), target, (0.0, 1.0, 0.0))
     return Camera(view=view, scale=size / float(width), center=np.zeros(2), width=size, height=size)
+
+
+# Pictures of a dense scan are drawn from a vertex-clustered copy of about PICTURE_VERTICES: a
+# 512-pixel picture shows no more, and the rasteriser's cost grows with the triangles drawn. The
+# landmarks are snapped to the full surface at the end.
+PICTURE_ABOVE = 40000
+PICTURE_VERTICES = 30000
+
+
+def pictured_mesh(V, F, above=None, vertices=None):
+    """The mesh to draw pictures of: ``(V, F)`` itself up to ``above`` (default
+    :data:`PICTURE_ABOVE`) vertices, else welded and each connected part vertex-clustered to a
+    common fraction (about ``vertices``, default :data:`PICTURE_VERTICES`, in all).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    Vp : (k, 3) float64
+        Same frame and units as ``V``.
+    Fp : (mp, 3) int64
+    """
+    above = PICTURE_ABOVE if above is None else above
+    vertices = PICTURE_VERTICES if vertices is None else vertices
+    if len(V) <= above:
+        return V, F
+    proxy = mesh_proxy(V, F, 1e-6 * float(np.ptp(V, axis=0).max()))
+    if len(proxy.vertices) <= above:
+        return proxy.vertices, proxy.faces
+    Vp, Fp, *_ = decimate_parts(proxy.vertices, proxy.faces, vertices, quadric=False)
+    return Vp, Fp
 
 
 def skin_faces(V, F):
