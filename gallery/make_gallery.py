@@ -18,6 +18,9 @@ kinds (a scan, a sculpt, a statue), drawn by ``autobones.landmarks.preview`` fro
 the side with each name's detection confidence; ``landmarks_given_goat``: the same
 preview of a landmark file placed by hand (no face detector works on a goat).
 
+``jaw_open_goat_robot``: the transferred jaw weight (green) on the goat and the robot, the jaw
+closed and opened 20 degrees by linear blend skinning: no torn flap.
+
 ``expressions_*``: the six emotion prototypes of ``generic_rig/expressions.json``
 (Erdoğdu 2010, Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
 transferred rig, neutral first, all from the front at one scale; the skin is tinted
@@ -171,19 +174,52 @@ def expression_picture(name, out, size=360):
     print(f"{path}: {', '.join(emotions)}; largest motion {top:.3g} (mesh units)")
 
 
+JAW_HEADS = ("goat", "robot")  # keys of TRANSFERS
+
+
+def jaw_open_picture(out, degrees=20.0, size=380):
+    """``jaw_open_goat_robot.png``: each head transferred, its jaw weight in green, closed and with
+    the jaw bone turned ``degrees`` open by linear blend skinning (what a glTF viewer does), three
+    quarter and side views; one row a head."""
+    rows = []
+    for name in JAW_HEADS:
+        mesh, marks = TRANSFERS[name]
+        rig = autobones.transfer(DATA / mesh, HERE.parent / marks)
+        j = rig.skeleton.names.index("jaw")
+        jaw = rig.weights[:, j][:, None]
+        C = rig.frame.to_canonical(rig.vertices)
+        pivot = rig.frame.to_canonical(rig.skeleton.heads[[j]])[0]
+        t = np.radians(degrees)
+        R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(t), -np.sin(t)], [0.0, np.sin(t), np.cos(t)]])
+        opened = C + jaw * ((C - pivot) @ R.T + pivot - C)  # about the left-right axis, chin down
+        colours = np.array([0.85, 0.85, 0.85]) * (1 - jaw) + np.array([0.15, 0.75, 0.2]) * jaw
+        views = ("three_quarter", "side")
+        rows.append(np.concatenate([render.render_views(P, rig.faces, vertex_colors=colours, views=views,
+                                                        size=(size, size), points=pivot[None],
+                                                        point_color=(20, 40, 200))
+                                    for P in (C, opened)], axis=1))
+    path = Path(out) / "jaw_open_goat_robot.png"
+    render.save_png(path, np.concatenate(rows, axis=0))
+    print(f"{path}: {', '.join(JAW_HEADS)}, jaw closed and opened {degrees:g} degrees")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
-                    + ["expressions"],
+                    + ["expressions", "jaw_open_goat_robot"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
-    names = args.only or list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES + expression_pictures
+    names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
+                          + expression_pictures + ["jaw_open_goat_robot"])
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else [n])]
     for name in names:
+        if name == "jaw_open_goat_robot":
+            jaw_open_picture(args.out)
+            continue
         if name.startswith("expressions_"):
             expression_picture(name[len("expressions_"):], args.out)
             continue

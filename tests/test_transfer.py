@@ -150,7 +150,9 @@ def test_glb_validates_and_rotating_the_jaw_opens_the_mouth(transferred, name, t
     disp = np.array(rep["poses"]["jaw"]["displacement"])
     jaw = _jaw(rig)
     size = rig.frame.size
-    assert disp[jaw > 0.8].mean() > 0.05 * size  # the chin swings
+    # the chin swings (the robot's chin tops out at 0.78: its pronasale, held at 0, is 3 edges away and
+    # no edge off the lip line may step by more than 0.3)
+    assert disp[jaw > 0.7].mean() > 0.05 * size
     assert disp[jaw == 0].max() < 1e-4 * size  # the skull stays
     assert disp[jaw < 0.01].max() < 0.02 * disp.max()
 

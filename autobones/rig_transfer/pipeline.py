@@ -29,6 +29,7 @@ import numpy as np
 
 from .correspondence import dense_correspondence
 from .eyes import bind_eyeballs, centre_eye_bones
+from .jaw import repair_jaw_weights
 from .fields import transfer_fields
 from .under_skin import carry_muscles, under_skin_warp
 from ..errors import AutobonesError
@@ -161,6 +162,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("skeleton")
 
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
+    # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
+    W = repair_jaw_weights(V, F, W, skeleton.names, lm)
     lap("attributes")
 
     labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
