@@ -145,12 +145,12 @@ def _check_spread(P, names, head, source):
 
 
 def _check_surface(P, names, V, F, head, source, max_off):
-    import igl
+    from ..geometry.closest import closest_points
 
     def off(Q):
         if not np.isfinite(Q).all():
             return np.full(len(Q), np.inf)
-        d2, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(Q), V, F)
+        d2 = closest_points(Q, V, F)[3]
         return np.sqrt(np.asarray(d2, dtype=np.float64)) / head
 
     d = off(P)
