@@ -258,6 +258,14 @@ def test_missing_detector_names_the_extra(monkeypatch):
         detect.MediaPipeFaceMesh()(np.zeros((8, 8, 3), np.uint8))
 
 
+def test_a_face_read_from_a_few_agreeing_names_is_refused(ict):
+    """When the views agree on only a few names (a face read upside down or half off the surface),
+    detection refuses with one message instead of returning those few."""
+    V, F, _, _ = ict
+    with pytest.raises(AutobonesError, match=r"no face read reliably .* only \d+ of 27 landmarks"):
+        LandmarkDetector(max_disagreement=0.004).detect(V, F)
+
+
 def test_views_that_disagree_drop_the_name():
     """A detector that puts one point in a different place in every view: that name is dropped."""
     from autobones.landmarks.mediapipe import MediaPipeFaceMesh

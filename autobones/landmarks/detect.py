@@ -65,6 +65,10 @@ SEARCH_SIZE = 256
 #: brows better than a head-on light in the landmark benchmark (benchmarks/landmarks.py).
 KEY_LIGHT = (0.0, 0.6, 1.0)
 
+# the least a reading of a face must give: this share of the detector's names, at this mean confidence
+# (legitimate heads in benchmarks/landmarks.py: every name, mean confidence 0.44-0.79)
+MIN_FOUND = 2.0 / 3.0
+MIN_CONFIDENCE = 0.3
 NO_FACE = ("no face found in the renders of {what}: automatic landmarks work on human and "
            "human-like faces; give its landmarks in a file instead (the contract's JSON, a MeshLab "
            ".pp or an iBUG-68 list: transfer --landmarks FILE, landmarks --from FILE)")
@@ -181,6 +185,17 @@ class LandmarkDetector:
                     break               # keep what the first pictures gave
         if not plausible(found):
             raise NoFaceError(NO_FACE.format(what=what))
+        # a face read from a picture upside down or half off the surface keeps a few names the
+        # views happen to agree on: that is no reading of the face, and a transfer from it would
+        # be wrong without a word
+        names = getattr(detector, "points", MEDIAPIPE_POINTS)
+        mean = float(np.mean(list(found.confidence.values()))) if found.confidence else 0.0
+        if len(found) < MIN_FOUND * len(names) or mean < MIN_CONFIDENCE:
+            raise NoFaceError(
+                f"no face read reliably in the renders of {what}: only {len(found)} of {len(names)} landmarks "
+                f"found, mean confidence {mean:.2f} (at least {int(np.ceil(MIN_FOUND * len(names)))} and "
+                f"{MIN_CONFIDENCE:g} needed); if the head's up or front was guessed wrong give --up/--front, "
+                f"else give its landmarks in a file (transfer --landmarks FILE, landmarks --from FILE)")
         return found
 
     def _find_face(self, Vc, F, detector, what, search):
