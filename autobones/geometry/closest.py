@@ -55,7 +55,10 @@ def near_faces(P, V, F):
     A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     longest = np.sqrt(max(((A - B) ** 2).sum(axis=1).max(), ((B - C) ** 2).sum(axis=1).max(),
                           ((C - A) ** 2).sum(axis=1).max()))
-    hits = tree.query_ball_point(P, d * (1 + 1e-9) + longest * (1 + 1e-9))
+    radius = d * (1 + 1e-9) + longest * (1 + 1e-9)
+    if not np.isfinite(radius).all() or radius.max() > 0.25 * np.linalg.norm(np.ptp(V[ids], axis=0)):
+        return np.arange(len(F))  # points far off the mesh: the search would cover most of it anyway
+    hits = tree.query_ball_point(P, radius)
     mark = np.zeros(len(V), dtype=bool)
     mark[ids[np.concatenate([np.asarray(h, dtype=np.int64) for h in hits])]] = True
     return np.flatnonzero(mark[F].any(axis=1))

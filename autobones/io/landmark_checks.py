@@ -145,12 +145,17 @@ def _check_spread(P, names, head, source):
 
 
 def _check_surface(P, names, V, F, head, source, max_off):
-    from ..geometry.closest import closest_points
+    import igl
+
+    from ..geometry.closest import FEW, near_faces
 
     def off(Q):
         if not np.isfinite(Q).all():
             return np.full(len(Q), np.inf)
-        d2 = closest_points(Q, V, F)[3]
+        Q = np.ascontiguousarray(Q, dtype=np.float64)
+        # a few landmarks on a scan: only the triangles that can hold their closest points
+        Fq = F[near_faces(Q, V, F)] if len(Q) * FEW < len(F) else F
+        d2, _, _ = igl.point_mesh_squared_distance(Q, V, np.ascontiguousarray(Fq))
         return np.sqrt(np.asarray(d2, dtype=np.float64)) / head
 
     d = off(P)
