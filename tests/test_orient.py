@@ -79,6 +79,26 @@ def test_the_same_bones_in_every_orientation_and_unit():
         np.testing.assert_allclose(rig.weights, ref.weights, atol=1e-6)
 
 
+UNIT_HEADS = ["ict/identity000.obj", "misc/LeePerrySmith.obj", "menpo3d/james.obj", "menpo3d/template.ply",
+              "misc/demosthenes-low-res.obj", "misc/goathead.obj", "misc/robot_head_neutral.obj",
+              "misc/fran_cut.obj", "misc/fsaverage_head.obj", None]
+
+
+@pytest.mark.parametrize("rel", UNIT_HEADS, ids=[str(k) for k in UNIT_HEADS])
+def test_every_head_gives_the_same_rig_in_any_unit_and_frame(rel):
+    """Issue #13: a head in metres, millimetres, micrometres or kilometres, in another of the 24 axis
+    frames, gets the same rig (joints to 1e-6 of the head size, weights to 1e-6): no tolerance is
+    absolute, and the symmetry plane's ICP settles on the same plane whatever the round-off."""
+    V, F = load_mesh(data(rel)) if rel else default_head()
+    ref = autobones.place((V, F), density="medium")
+    Qs = rotations24()
+    for scale, Q in ((1e-3, Qs[5]), (1e3, Qs[13]), (1e6, Qs[22])):
+        rig = autobones.place((scale * V @ Q.T, F), density="medium")
+        heads = rig.skeleton.heads @ Q / scale
+        np.testing.assert_allclose(heads, ref.skeleton.heads, rtol=0, atol=1e-6 * ref.frame.size)
+        np.testing.assert_allclose(rig.weights, ref.weights, rtol=0, atol=1e-6)
+
+
 def test_overrides_are_obeyed():
     V, F = load_mesh(data("misc/robot_head_neutral.obj"))
     frame = detect_frame(V, F, up="+y", front="+z")

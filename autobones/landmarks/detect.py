@@ -279,7 +279,7 @@ class LandmarkDetector:
             # how squarely the view sees the surface where each point lands: grazing views lift
             # badly, and a point that lands on a surface facing away (the far side of an
             # eyeball, an eyelash) is no sight of the skin at all
-            _, near = tree.query(np.nan_to_num(P))
+            _, near = tree.query(np.nan_to_num(P), workers=-1)
             facing = np.clip(N[near] @ d, 0.0, 1.0)
             cands.append(P)
             weights.append(np.where(np.all(np.isfinite(P), axis=1), facing ** 2, 0.0))

@@ -95,10 +95,6 @@ from .stick import stick
 
 log = logging.getLogger(__name__)
 
-# Target vertices the reverse term matches per iteration at most: a dense scan is sampled (fixed
-# seed), since its nearest-source queries were most of the fit's time on a 134k-vertex scan.
-REVERSE_SAMPLE = 40000
-
 
 class _PartTrees:
     """Nearest target vertex per source vertex, restricted to a part when one is assigned.
@@ -121,9 +117,9 @@ class _PartTrees:
         out = np.empty(len(X), dtype=np.int64)
         lab = np.isin(labels, self.parts)
         if lab.any():
-            out[lab] = self.idx[self.tree4.query(np.c_[X[lab], self.big * labels[lab]])[1]]
+            out[lab] = self.idx[self.tree4.query(np.c_[X[lab], self.big * labels[lab]], workers=-1)[1]]
         if not lab.all():
-            out[~lab] = self.idx[self.tree3.query(X[~lab])[1]]
+            out[~lab] = self.idx[self.tree3.query(X[~lab], workers=-1)[1]]
         return out
 
 
@@ -137,7 +133,7 @@ def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big
     matched target vertices (the centroid of the target surface closest to
     it); ``a`` (n,) the target area it received.
     """
-    d, i = cKDTree(np.c_[X[sidx], big * labels[sidx]]).query(np.c_[V_tgt[tq], big * tgt_part[tq]])
+    d, i = cKDTree(np.c_[X[sidx], big * labels[sidx]]).query(np.c_[V_tgt[tq], big * tgt_part[tq]], workers=-1)
     i = sidx[i]
     ok = (np.einsum("ij,ij->i", N[i], N_tgt[tq]) >= cos_max) & (d <= 5.0 * np.median(d) + 1e-12)
     i, k = i[ok], tq[ok]
@@ -163,9 +159,9 @@ def _decimate(V, F, count):
 def _interpolate(Vc, Fc, Dc, V, F, k=4):
     """Displacements ``Dc`` of coarse vertices ``Vc`` -> fine vertices ``V``: inverse squared distance of the ``k`` nearest of the same part."""
     part = mesh_parts(len(V), F)
-    part_c = part[cKDTree(V).query(Vc)[1]]
+    part_c = part[cKDTree(V).query(Vc, workers=-1)[1]]
     big = 10.0 * (np.ptp(V, axis=0).max() + 1.0)
-    d, i = cKDTree(np.c_[Vc, big * part_c]).query(np.c_[V, big * part], k=min(k, len(Vc)))
+    d, i = cKDTree(np.c_[Vc, big * part_c]).query(np.c_[V, big * part], k=min(k, len(Vc)), workers=-1)
     d, i = d.reshape(len(V), -1), i.reshape(len(V), -1)
     w = 1.0 / np.maximum(d, 1e-12 * big) ** 2
     w /= w.sum(axis=1, keepdims=True)
@@ -271,12 +267,6 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
         tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
         area_t = tgt["area"]
-        if len(tq) > REVERSE_SAMPLE:
-            # a dense scan: the area-weighted centroids of the reverse term from a fixed random
-            # sample of its vertices (areas scaled up to the whole), at a fraction of the queries
-            keep = np.sort(np.random.default_rng(0).choice(len(tq), REVERSE_SAMPLE, replace=False))
-            area_t = area_t * (len(tq) / REVERSE_SAMPLE)
-            tq = tq[keep]
         if len(sidx) and len(tq):
             reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), tlab, sidx, tq, area_t)
     if X0 is not None:

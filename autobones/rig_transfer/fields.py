@@ -163,7 +163,7 @@ def inpaint(V, F, values, known):
     if not kw.all():
         from scipy.spatial import cKDTree
 
-        _, j = cKDTree(Vw[kw]).query(Vw[~kw])
+        _, j = cKDTree(Vw[kw]).query(Vw[~kw], workers=-1)
         Xw[~kw] = Xw[kw][j]
     out = Xw[index]
     out[known] = X[known]

@@ -263,7 +263,7 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
         from scipy.spatial import cKDTree
 
         reach = max(REACH * fu, 30.0 * h_med)
-        far = np.isinf(cKDTree(Vw[source]).query(Vw, distance_upper_bound=reach)[0])
+        far = np.isinf(cKDTree(Vw[source]).query(Vw, distance_upper_bound=reach, workers=-1)[0])
         settled = ~fixed & far
         value = np.where(settled, ww, value)
         fixed |= settled
