@@ -18,6 +18,10 @@ kinds (a scan, a sculpt, a statue), drawn by ``autobones.landmarks.preview`` fro
 the side with each name's detection confidence; ``landmarks_given_goat``: the same
 preview of a landmark file placed by hand (no face detector works on a goat).
 
+``place_head_turn``: the head bone of a dense ``place`` rig turned 15 degrees (linear blend
+skinning) on the default head and on a bust, the skin tinted orange by how far each vertex moved
+(relative to the largest motion): the face and skull turn as one, the neck twists, its base stays.
+
 ``jaw_open_goat_robot``: the transferred jaw weight (green) on the goat and the robot, the jaw
 closed and opened 20 degrees by linear blend skinning: no torn flap.
 
@@ -203,22 +207,64 @@ def jaw_open_picture(out, degrees=20.0, size=380):
     print(f"{path}: {', '.join(JAW_HEADS)}, jaw closed and opened {degrees:g} degrees")
 
 
+TURN_HEADS = {"default head": None, "Lee Perry-Smith": "misc/LeePerrySmith.obj"}  # mesh under ../shared/data
+
+
+def head_turn_picture(out, degrees=15.0, size=360):
+    """``place_head_turn.png``: each head rigged by ``place`` (dense), its head bone turned ``degrees``
+    about the up axis through the head/neck joint by linear blend skinning; front, three-quarter and
+    side views of the turned head, tinted by motion; one row a head, labelled with the largest motion
+    of the neck base (its lowest 5 %) relative to the peak."""
+    rows = []
+    for label, rel in TURN_HEADS.items():
+        rig = autobones.place(None if rel is None else DATA / rel, density="dense")
+        C = rig.frame.to_canonical(rig.vertices)
+        head = rig.skeleton.names.index("head")
+        pivot = rig.frame.to_canonical(rig.skeleton.heads[[head]])[0]
+        moved = np.zeros(len(rig.skeleton), dtype=bool)  # the head bone and its descendants
+        for j, parent in enumerate(rig.skeleton.parents):  # parents come before their children
+            moved[j] = j == head or (parent >= 0 and moved[parent])
+        share = rig.weights[:, moved].sum(axis=1, keepdims=True)
+        t = np.radians(degrees)
+        R = np.array([[np.cos(t), 0.0, np.sin(t)], [0.0, 1.0, 0.0], [-np.sin(t), 0.0, np.cos(t)]])
+        turned = C + share * ((C - pivot) @ R.T + pivot - C)
+        motion = np.linalg.norm(turned - C, axis=1)
+        a = (motion / motion.max())[:, None] ** 0.7
+        colours = (1 - a) * np.array([0.85, 0.85, 0.85]) + a * np.array([1.0, 0.45, 0.1])
+        bottom = C[:, 1].min()
+        base = C[:, 1] <= bottom + 0.05 * (pivot[1] - bottom)
+        note = f"{label}: neck base {motion[base].max() / motion.max():.1%} of peak"
+        mark = np.array([[C[:, 0].min(), bottom - 0.04, C[:, 2].max()]])
+        rows.append(np.concatenate([
+            render.render_views(turned, rig.faces, vertex_colors=colours, views=(view,), size=(size, size),
+                                points=np.vstack([pivot[None], mark]) if k == 0 else pivot[None],
+                                point_labels=["joint", note] if k == 0 else ["joint"], point_color=(40, 40, 40))
+            for k, view in enumerate(("front", "three_quarter", "side"))], axis=1))
+        print(f"{label}: peak {motion.max():.3g} head sizes, neck base {motion[base].max() / motion.max():.2%} of it")
+    path = Path(out) / "place_head_turn.png"
+    render.save_png(path, np.concatenate(rows, axis=0))
+    print(f"{path}: {', '.join(TURN_HEADS)}, head turned {degrees:g} degrees")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
-                    + ["expressions", "jaw_open_goat_robot"],
+                    + ["expressions", "jaw_open_goat_robot", "place_head_turn"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
-                          + expression_pictures + ["jaw_open_goat_robot"])
+                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn"])
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else [n])]
     for name in names:
         if name == "jaw_open_goat_robot":
             jaw_open_picture(args.out)
+            continue
+        if name == "place_head_turn":
+            head_turn_picture(args.out)
             continue
         if name.startswith("expressions_"):
             expression_picture(name[len("expressions_"):], args.out)

@@ -7,7 +7,9 @@ at a chosen density, smooth skinning), one module a stage:
   head and neck bones;
 - ``facial_bones``: mirror-symmetric k-means facial bones on the facial mask;
 - ``skin_weights``: bone heat (heat diffusion from each bone) on the intrinsic Laplacian;
-- ``pipeline``: :func:`place`, which runs load -> orient -> segment -> facial bones -> weights and
+- ``locality``: the heat weights kept local (facial bones on the face, a still neck base, a
+  neck-free skull);
+- ``pipeline``: :func:`place`, which runs load -> orient -> segment -> facial bones -> weights -> locality and
   returns a :class:`autobones.rig.Rig`.
 """
 from .pipeline import place

@@ -22,6 +22,7 @@ from ..rig import Rig
 from ..timing import Stopwatch
 from .segment import segment_head
 from ..skeleton import Skeleton
+from .locality import restrict_weights
 from .skin_weights import PROXY_ABOVE, PROXY_VERTICES, WELD_TOL, bone_heat_weights
 
 log = logging.getLogger("autobones")
@@ -83,6 +84,9 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
                       np.vstack([seg.neck_bone[0], seg.head_bone[0], heads]),
                       np.vstack([seg.neck_bone[1], seg.head_bone[1], tails]))
     W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy)
+    # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
+    # blend band, the neck base pure neck, no neck weight on the skull
+    restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F)
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}

@@ -1,0 +1,136 @@
+"""``place`` weights stay local (issue #13, item 5): the neck base is pure neck, facial bones weigh
+nothing beyond the facial mask and its blend band, the top of the skull has no neck weight, and a
+head turn posed by linear blend skinning leaves the neck base still; on human, animal, robot and
+scanned heads and on a dense head solved through the decimated proxy."""
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import cKDTree
+
+import autobones
+import autobones.placement.pipeline as pipeline
+from autobones.geometry.rotations import axis_rotation
+from autobones.io.mesh import load_mesh
+from autobones.placement.locality import FACIAL_BAND, SKULL_BLEND
+from autobones.placement.skin_weights import bone_heat_weights
+
+from shared_data import data
+
+HEADS = [None, "ict/generic_neutral_mesh.obj", "misc/LeePerrySmith.obj", "misc/demosthenes-low-res.obj",
+         "misc/goathead.obj", "misc/robot_head_neutral.obj", "menpo3d/james.obj"]
+IDS = ["default", "ict", "lps", "demosthenes", "goat", "robot", "james"]
+
+
+@pytest.fixture(scope="module")
+def dense_rig():
+    """LeePerrySmith Loop-subdivided once (35,346 vertices), rigged through the decimated proxy."""
+    V, F = load_mesh(data("misc/LeePerrySmith.obj"))
+    V, F = trimesh.remesh.subdivide_loop(V, F, iterations=1)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pipeline, "PROXY_ABOVE", 20000)
+        mp.setattr(pipeline, "PROXY_VERTICES", 8000)
+        rig = autobones.place((np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)), density="dense")
+    assert rig.timings["proxy"] >= 0
+    return rig
+
+
+@pytest.fixture(params=HEADS + ["proxy"], ids=IDS + ["lps-dense-proxy"])
+def rig(request, rigs, dense_rig):
+    return dense_rig if request.param == "proxy" else rigs(request.param, "dense")
+
+
+def _canonical(rig):
+    C = rig.frame.to_canonical(rig.vertices)
+    used = np.unique(rig.faces)
+    joint = rig.frame.to_canonical(rig.skeleton.heads[[rig.skeleton.names.index("head")]])[0]
+    return C, C[used, 1].min(), C[used, 1].max(), joint
+
+
+def _neck_base(rig):
+    """The lowest 5 % of the neck: height from the lowest vertex to the head/neck joint."""
+    C, bottom, _, joint = _canonical(rig)
+    return C[:, 1] <= bottom + 0.05 * (joint[1] - bottom)
+
+
+def _turn(rig, bone, degrees, axis):
+    """Linear blend skinning of ``bone`` turned ``degrees`` about the canonical ``axis`` (0, 1, 2:
+    left, up, front) through its head; its descendants follow. Posed vertices, input frame."""
+    S = rig.skeleton
+    Q = rig.frame.rotation  # rows: the canonical axes in the input frame
+    R = Q.T @ axis_rotation(axis, degrees) @ Q
+    p = S.heads[bone]
+    moved = np.zeros(len(S), dtype=bool)
+    for j in range(len(S)):  # parents come before their children
+        moved[j] = j == bone or (S.parents[j] >= 0 and moved[S.parents[j]])
+    V = rig.vertices
+    share = rig.weights[:, moved].sum(axis=1, keepdims=True)
+    return V + share * ((V - p) @ R.T + p - V)
+
+
+def test_rows_are_still_a_partition_of_unity(rig):
+    W = rig.weights
+    assert np.isfinite(W).all() and W.min() >= 0
+    np.testing.assert_allclose(W.sum(axis=1), 1.0, atol=1e-9)
+
+
+def test_neck_base_is_pure_neck(rig):
+    base = _neck_base(rig)
+    assert base.sum() >= 3
+    neck = rig.weights[base, rig.skeleton.names.index("neck")]
+    assert neck.min() >= 0.95, f"neck base neck weight down to {neck.min():.3f}"
+
+
+def test_facial_bones_weigh_nothing_beyond_the_mask_and_its_band(rig):
+    C = rig.frame.to_canonical(rig.vertices)
+    d, _ = cKDTree(C[rig.facial_mask]).query(C)
+    far = d > FACIAL_BAND
+    assert far.any()
+    facial = rig.weights[:, 2:]
+    assert facial[far].max() == 0.0, f"facial weight {facial[far].max():.3g} beyond the band"
+    # the face itself is still moved by its facial bones
+    assert facial[rig.facial_mask].sum(axis=1).mean() > 0.9
+
+
+def test_top_of_the_skull_has_no_neck_weight(rig):
+    C, _, top, joint = _canonical(rig)
+    skull = C[:, 1] >= joint[1] + SKULL_BLEND * (top - joint[1])
+    assert skull.any()
+    assert rig.weights[skull, rig.skeleton.names.index("neck")].max() == 0.0
+
+
+def test_head_turn_leaves_the_neck_base_still(rig):
+    head = rig.skeleton.names.index("head")
+    motion = np.linalg.norm(_turn(rig, head, 15.0, 1) - rig.vertices, axis=1)  # about the up axis
+    peak = motion.max()
+    assert peak > 0.05 * rig.frame.size * np.radians(15.0)
+    base = _neck_base(rig)
+    assert motion[base].max() < 0.01 * peak, f"neck base moves {motion[base].max() / peak:.1%} of the peak"
+
+
+def test_chin_bone_moves_only_the_face(rig):
+    C = rig.frame.to_canonical(rig.vertices)
+    heads = rig.frame.to_canonical(rig.skeleton.heads)
+    chin = 2 + int(np.argmin(heads[2:, 1]))  # the lowest facial bone
+    motion = np.linalg.norm(_turn(rig, chin, 15.0, 0) - rig.vertices, axis=1)  # about left-right
+    d, _ = cKDTree(C[rig.facial_mask]).query(C)
+    assert motion.max() > 0
+    assert motion[d > FACIAL_BAND].max() <= 1e-12 * rig.frame.size
+    assert motion[_neck_base(rig)].max() <= 1e-12 * rig.frame.size
+
+
+@pytest.mark.parametrize("rel", [None, "misc/LeePerrySmith.obj"], ids=["default", "lps"])
+def test_no_seam_steeper_than_the_heat_weights(rigs, rel):
+    """The restriction's smooth steps change the weights no faster along an edge (per head size) than
+    bone heat itself does: no seam at the mask's band, the neck base or the skull."""
+    rig = rigs(rel, "dense")
+    C = rig.frame.to_canonical(rig.vertices)
+    segments = rig.frame.to_canonical(rig.skeleton.segments.reshape(-1, 3)).reshape(-1, 2, 3)
+    heat = bone_heat_weights(C, rig.faces, segments)
+    E = np.vstack([rig.faces[:, [0, 1]], rig.faces[:, [1, 2]], rig.faces[:, [2, 0]]])
+    length = np.linalg.norm(C[E[:, 0]] - C[E[:, 1]], axis=1)
+    ok = length > 0
+
+    def steep(W):
+        return np.quantile(np.abs(W[E[ok, 0]] - W[E[ok, 1]]).sum(axis=1) / length[ok], 0.999)
+
+    assert steep(rig.weights) <= 1.25 * steep(heat)
