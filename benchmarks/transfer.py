@@ -2,6 +2,7 @@
 
     python benchmarks/transfer.py            # all 12 ordered ICT pairs, 27 and 10 landmarks
     python benchmarks/transfer.py --quick    # two pairs
+    python benchmarks/transfer.py --scans    # time on dense scans: transfer and automatic landmarks
 
 For each ordered pair (A, B) of the ICT same-topology heads (neutral and three
 identities; vertex i of one is the true partner of vertex i of another), a
@@ -19,6 +20,14 @@ onto B by the full ``transfer`` pipeline, with all 27 shared landmarks and with
 
 Also the built-in generic rig onto each ICT identity (time only: no ground truth).
 Timings are wall-clock on a shared machine; read ratios between rows, not absolutes.
+
+``--scans``: the built-in generic rig onto real scans and their Loop subdivisions (never decimated
+after): ICT identity000 (26,719 vertices) and Loop x1 (105,569), the menpo3d template (53,349) and
+Loop x1 (212,809), with their published landmarks moved to the subdivided surface by closest point,
+and the demosthenes statue scan Loop x2 (133,887, a bust; the performance issue's 134k scan), whose
+landmarks are found automatically first. Per head: ``autobones.transfer`` seconds per stage (median of
+3 runs below 10 s), and ``autobones.detect_landmarks`` seconds after a warm-up call loads the model
+(frame + detection), median of 3.
 """
 from __future__ import annotations
 
@@ -59,15 +68,63 @@ def rig_on(name):
                        fields=fields, labels={"region": [f"r{i}" for i in range(12)]})
 
 
+def scans():
+    """Time ``transfer`` and ``detect_landmarks`` on dense scans (module doc, ``--scans``)."""
+    import trimesh
+
+    from autobones.geometry.closest import closest_points
+
+    shared = DATA.parent
+    rows = [("ICT identity000", "ict/identity000.obj", 0), ("ICT identity000", "ict/identity000.obj", 1),
+            ("menpo3d template", "menpo3d/template.ply", 0), ("menpo3d template", "menpo3d/template.ply", 1),
+            ("demosthenes", "misc/demosthenes-low-res.obj", 2)]
+    print(f"{'head':18s} {'how':8s} {'vertices':>9s} {'load':>5s} {'lmk':>5s} {'corr':>5s} {'skel':>5s} "
+          f"{'attr':>5s} {'total s':>7s} {'landmarks s':>11s}")
+    autobones.detect_landmarks(load_mesh(shared / "menpo3d/james.obj"))  # loads the detector model
+    for label, rel, loops in rows:
+        V, F = load_mesh(shared / rel)
+        lm_file = (shared / rel).with_suffix(".landmarks.json")
+        lm = ({k: np.array(v) for k, v in json.load(open(lm_file))["landmarks"].items()}
+              if lm_file.exists() else None)
+        if loops:
+            V, F = trimesh.remesh.subdivide_loop(V, F, iterations=loops)
+            V, F = np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64)
+        if lm is not None:  # onto the subdivided surface
+            names = list(lm)
+            P = closest_points(np.array([lm[n] for n in names]), V, F)[0]
+            lm = dict(zip(names, P))
+        detect = []
+        for _ in range(3):
+            t = time.perf_counter()
+            found = autobones.detect_landmarks((V, F))
+            detect.append(time.perf_counter() - t)
+        lm = lm if lm is not None else dict(found)
+        runs = []
+        for _ in range(3):
+            t = time.perf_counter()
+            rig = autobones.transfer((V, F), lm)
+            runs.append((time.perf_counter() - t, rig.timings))
+            if runs[-1][0] > 10:
+                break
+        total, tm = sorted(runs, key=lambda r: r[0])[len(runs) // 2]
+        print(f"{label:18s} {('loop x%d' % loops) if loops else 'own':8s} {len(V):9,d} {tm['load']:5.2f} "
+              f"{tm['landmarks']:5.2f} {tm['correspond']:5.2f} {tm['skeleton']:5.2f} {tm['attributes']:5.2f} "
+              f"{total:7.2f} {np.median(detect):11.2f}", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--scans", action="store_true", help="time on dense scans only (transfer, landmarks)")
     args = ap.parse_args(argv)
+    print(f"# machine: {platform.processor() or platform.machine()}, {__import__('os').cpu_count()} cores, "
+          f"load average {__import__('os').getloadavg()[0]:.1f}")
+    if args.scans:
+        return scans()
     pairs = list(itertools.permutations(HEADS, 2))
     if args.quick:
         pairs = [("identity000", "identity001"), ("identity001", "identity002")]
     rigs = {}
-    print(f"# machine: {platform.processor() or platform.machine()}, {__import__('os').cpu_count()} cores")
     head = (f"{'source -> target':34s} {'lm':>3s} {'mean%':>6s} {'p95%':>6s} {'skin':>6s} {'skin95':>6s} "
             f"{'field%':>6s} {'labels':>6s} {'corr s':>6s} {'attr s':>6s} {'total s':>7s}")
     print(head)

@@ -75,6 +75,8 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
     if facial is None:
         facial = [j for j in range(b) if j not in (neck, head)]
     facial = np.asarray(facial, dtype=np.int64)
+    if len(facial) and np.array_equal(facial, np.arange(facial[0], facial[0] + len(facial))):
+        facial = slice(int(facial[0]), int(facial[0]) + len(facial))  # a view, not a copy per block
     facial_mask = np.asarray(facial_mask, dtype=bool)
     y = C[:, 1]
     used = y if faces is None or len(faces) == 0 else y[used_vertices(np.asarray(faces), n)]
@@ -82,7 +84,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
     neck_h, skull_h = max(yj - bottom, 1e-12), max(top - yj, 1e-12)
 
     # 1. facial bones fade out beyond the mask's blend band (distances bounded by it: inf beyond)
-    if len(facial):
+    if (facial.stop > facial.start) if isinstance(facial, slice) else len(facial):
         if facial_mask.any():
             d, _ = cKDTree(C[facial_mask]).query(C, distance_upper_bound=band)
             keep = 1.0 - smoothstep(np.minimum(d, band) / band)

@@ -55,10 +55,14 @@ def segment_distances(P, segments):
     AB = B - A
     L2 = np.maximum((AB ** 2).sum(axis=1), 1e-300)
     out = np.empty((len(P), len(segments)))
+    # coordinate by coordinate on (n, b) arrays, summed x, y, z in that order: the same numbers as
+    # sums over a length-3 axis, which numpy reduces slowly
     for s in range(0, len(P), CHUNK):
-        X = P[s:s + CHUNK, None, :]
-        t = np.clip(((X - A) * AB).sum(axis=2) / L2, 0.0, 1.0)
-        out[s:s + CHUNK] = np.linalg.norm(X - (A + t[..., None] * AB), axis=2)
+        X = [P[s:s + CHUNK, k:k + 1] for k in range(3)]
+        D = [X[k] - A[:, k] for k in range(3)]
+        t = np.clip((D[0] * AB[:, 0] + D[1] * AB[:, 1] + D[2] * AB[:, 2]) / L2, 0.0, 1.0)
+        E = [X[k] - (A[:, k] + t * AB[:, k]) for k in range(3)]
+        out[s:s + CHUNK] = np.sqrt(E[0] * E[0] + E[1] * E[1] + E[2] * E[2])
     return out
 
 
@@ -162,11 +166,9 @@ def _carry_up(V, coarse, segments, heat):
     rest = np.flatnonzero(~whole)
     if len(rest):
         _, face, bary, _ = closest_points(V[rest], Vp, Fp, labels=part[rest], face_labels=face_part)
-        corners = Fp[face]
-        for s in range(0, len(rest), CHUNK):  # a block at a time: no (n, 3, b) temporaries
-            c, b = corners[s:s + CHUNK], bary[s:s + CHUNK]
-            block = b[:, 0:1] * Wp[c[:, 0]]
-            block += b[:, 1:2] * Wp[c[:, 1]]
-            block += b[:, 2:3] * Wp[c[:, 2]]
-            W[rest[s:s + CHUNK]] = block
+        # one sparse (rest, proxy) interpolation matrix, three entries a row in corner order: its
+        # product sums b0 W0 + b1 W1 + b2 W2 as the blocks did, with no (n, 3, b) temporaries
+        interp = sp.csr_matrix((bary.ravel(), Fp[face].ravel(), np.arange(0, 3 * len(rest) + 1, 3)),
+                               shape=(len(rest), len(Vp)))
+        W[rest] = interp @ Wp
     return W
