@@ -261,7 +261,7 @@ def _refine_plane(P, tree, n, d, scale, iterations=12):
     best = None
     for _ in range(iterations):
         mirrored = reflect(P, n, d)
-        dist, j = tree.query(mirrored, workers=-1)
+        dist, j = tree.query(mirrored)
         err = float(np.sort(dist)[: int(0.9 * len(dist))].mean())  # _mirror_error of (n, d)
         if best is None or err < best[0] * (1 - 1e-9):
             best = (err, n, d)
@@ -280,7 +280,7 @@ def _refine_plane(P, tree, n, d, scale, iterations=12):
 
 
 def _mirror_error(P, tree, n, d):
-    dist, _ = tree.query(reflect(P, n, d), workers=-1)
+    dist, _ = tree.query(reflect(P, n, d))
     return float(np.sort(dist)[: int(0.9 * len(dist))].mean())
 
 
@@ -311,7 +311,7 @@ def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
     rot, s, t = np.eye(3), 1.0, np.zeros(3)
     for _ in range(iterations):
         X = s * Q @ rot.T + t
-        dist, j = ref_tree.query(X, workers=-1)
+        dist, j = ref_tree.query(X)
         keep = dist <= np.quantile(dist, 0.8)
         A, B = Q[keep], ref[j[keep]]
         # Umeyama: the similarity B ~ s rot A + t in least squares
@@ -324,8 +324,8 @@ def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
         s = float(np.clip((S * np.diag(D)).sum() / ((A - Am) ** 2).sum(), 0.5, 2.0))
         t = Bm - s * Am @ rot.T
     X = s * Q @ rot.T + t
-    d1, _ = ref_tree.query(X, workers=-1)
-    d2, _ = cKDTree(X).query(ref, workers=-1)
+    d1, _ = ref_tree.query(X)
+    d2, _ = cKDTree(X).query(ref)
     trim = lambda d: float(np.sort(d)[: int(0.8 * len(d))].mean())
     return trim(d1) + trim(d2)
 

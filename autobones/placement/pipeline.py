@@ -83,7 +83,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     skel_c = Skeleton(names, parents,
                       np.vstack([seg.neck_bone[0], seg.head_bone[0], heads]),
                       np.vstack([seg.neck_bone[1], seg.head_bone[1], tails]))
-    W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy)
+    W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy, prune=0)  # pruned once, after the restriction
     # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
     # blend band, the neck base pure neck, no neck weight on the skull
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F)

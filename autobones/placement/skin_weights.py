@@ -160,15 +160,18 @@ def _carry_up(V, coarse, segments, heat):
     # minimum degree in symmetric mode: on decimated meshes half COLAMD's fill and a 2-5x faster
     # solve for all bones; its ordering step only blows up far above the proxy's size
     Wp = _heat(Vp, Fp, segments, heat, ordering="mmd_symmetric" if len(Vp) <= PROXY_ABOVE else "colamd")
-    W = np.empty((len(V), len(segments)))
     whole = kept >= 0
-    W[whole] = Wp[kept[whole]]
     rest = np.flatnonzero(~whole)
+    W = None if len(rest) == len(V) else np.empty((len(V), len(segments)))
+    if W is not None:
+        W[whole] = Wp[kept[whole]]
     if len(rest):
         _, face, bary, _ = closest_points(V[rest], Vp, Fp, labels=part[rest], face_labels=face_part)
         # one sparse (rest, proxy) interpolation matrix, three entries a row in corner order: its
         # product sums b0 W0 + b1 W1 + b2 W2 as the blocks did, with no (n, 3, b) temporaries
         interp = sp.csr_matrix((bary.ravel(), Fp[face].ravel(), np.arange(0, 3 * len(rest) + 1, 3)),
                                shape=(len(rest), len(Vp)))
+        if len(rest) == len(V):
+            return interp @ Wp  # every part decimated (most scans): no second (n, b) array
         W[rest] = interp @ Wp
     return W
