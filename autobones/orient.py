@@ -309,10 +309,14 @@ def _overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
     ref = _top_part(ref)
     ref_tree = cKDTree(ref)
     rot, s, t = np.eye(3), 1.0, np.zeros(3)
+    last = None
     for _ in range(iterations):
         X = s * Q @ rot.T + t
         dist, j = ref_tree.query(X)
         keep = dist <= np.quantile(dist, 0.8)
+        if last is not None and np.array_equal(j, last[0]) and np.array_equal(keep, last[1]):
+            break  # the same matches give the same similarity: a fixed point, every later step equal
+        last = (j, keep)
         A, B = Q[keep], ref[j[keep]]
         # Umeyama: the similarity B ~ s rot A + t in least squares
         Am, Bm = A.mean(axis=0), B.mean(axis=0)
