@@ -26,8 +26,8 @@ after): ICT identity000 (26,719 vertices) and Loop x1 (105,569), the menpo3d tem
 Loop x1 (212,809), with their published landmarks moved to the subdivided surface by closest point,
 and the demosthenes statue scan Loop x2 (133,887, a bust; the performance issue's 134k scan), whose
 landmarks are found automatically first. Per head: ``autobones.transfer`` seconds per stage (median of
-3 runs below 10 s), and ``autobones.detect_landmarks`` seconds after a warm-up call loads the model
-(frame + detection), median of 3.
+3 runs below 10 s), and automatic landmarks in seconds (frame + detection, as ``detect_landmarks`` does)
+with the detector model loaded once beforehand, median of 3.
 """
 from __future__ import annotations
 
@@ -80,7 +80,12 @@ def scans():
             ("demosthenes", "misc/demosthenes-low-res.obj", 2)]
     print(f"{'head':18s} {'how':8s} {'vertices':>9s} {'load':>5s} {'lmk':>5s} {'corr':>5s} {'skel':>5s} "
           f"{'attr':>5s} {'total s':>7s} {'landmarks s':>11s}")
-    autobones.detect_landmarks(load_mesh(shared / "menpo3d/james.obj"))  # loads the detector model
+    from autobones.landmarks.detect import LandmarkDetector
+    from autobones.landmarks.mediapipe import MediaPipeFaceMesh
+    from autobones.orient import detect_frame
+
+    detector = LandmarkDetector(detector=MediaPipeFaceMesh())  # one model, loaded by the first call
+    detector.detect(*load_mesh(shared / "menpo3d/james.obj"))
     for label, rel, loops in rows:
         V, F = load_mesh(shared / rel)
         lm_file = (shared / rel).with_suffix(".landmarks.json")
@@ -96,7 +101,7 @@ def scans():
         detect = []
         for _ in range(3):
             t = time.perf_counter()
-            found = autobones.detect_landmarks((V, F))
+            found = detector.detect(V, F, frame=detect_frame(V, F))  # as detect_landmarks, model loaded
             detect.append(time.perf_counter() - t)
         lm = lm if lm is not None else dict(found)
         runs = []

@@ -65,6 +65,7 @@ ROUNDS = 16             # smoothing rounds at most
 SPRING_CAP = 64.0        # the strongest spring, in the Laplacian's weights (an infeasible step stays local)
 ABOVE_MARGIN = 0.12     # fu above the jaw's top plane: jaw 0 there
 CORNER = 0.06           # fu: edges this near a mouth corner belong to the lip line
+RINGS = 8               # rings of edges around the springs that later rounds re-solve
 REACH = 0.4             # fu: vertices farther than this from any jaw weight keep theirs (0), unsolved
 LOWER = ("pogonion", "labiale_inferius", "sublabiale")  # not the menton: see the module doc
 UPPER = ("vertex", "opisthocranion", "glabella", "nasion", "pronasale", "subnasale", "labiale_superius",
@@ -283,27 +284,41 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
     x = value.copy()
     m = np.where(m > 0, m, h ** 2)  # vertices on no face: a nominal area
     free = np.flatnonzero(~fixed)
-    fixed_idx = np.flatnonzero(fixed)
     spring = np.zeros(len(Ew))
     # the data term holds the jaw's core harder than its rim: the falloff widens outward (into the
     # neck and the cheeks) instead of eating into the chin
     lam = (0.1 + 0.9 * ww) * m / h ** 2
     rounds = 0
+    solve_at = free
     for rounds in range(1, ROUNDS + 1):
-        if len(free):
+        if len(solve_at):
             # springs on edges that jumped in earlier rounds: on sliver triangles the Laplacian's
             # weight of a long edge is near zero, and only a spring evens its two ends
-            S = sp.coo_matrix((np.r_[spring, spring], (np.r_[Ew[:, 0], Ew[:, 1]], np.r_[Ew[:, 1], Ew[:, 0]])),
-                              shape=(nw, nw)).tocsr()
-            K = L + sp.diags(np.asarray(S.sum(axis=1)).ravel()) - S
-            A = K[free][:, free] + sp.diags(lam[free])
-            x[free] = factor_spd(A)(lam[free] * ww[free] - K[free][:, fixed_idx] @ value[fixed_idx])
+            on = spring > 0
+            Es, ks = Ew[on], spring[on]
+            S = sp.csr_matrix((np.r_[ks, ks], (np.r_[Es[:, 0], Es[:, 1]], np.r_[Es[:, 1], Es[:, 0]])), shape=(nw, nw))
+            # the rows being solved only: the rest of the surface is held where it is
+            r = np.arange(len(solve_at))
+            degree = sp.csr_matrix((np.asarray(S.sum(axis=1)).ravel()[solve_at], (r, solve_at)),
+                                   shape=(len(solve_at), nw))
+            K = L[solve_at] + degree - S[solve_at]
+            held = x.copy()
+            held[solve_at] = 0.0
+            A = K[:, solve_at] + sp.diags(lam[solve_at])
+            x[solve_at] = factor_spd(A)(lam[solve_at] * ww[solve_at] - K @ held)
         x = np.clip(x, 0.0, 1.0)
         jump = np.abs(x[Ew[:, 0]] - x[Ew[:, 1]])
         bad = check & (jump > TARGET_JUMP)
         if not bad.any():
             break
         spring[bad] = np.minimum(np.maximum(2.0 * spring[bad], 1.0), SPRING_CAP)
+        # later rounds re-solve only around the springs (RINGS rings of edges): the screened field
+        # decays within a few edges, and a whole face's solve per round took seconds on dense scans
+        near = np.zeros(nw, dtype=bool)
+        near[Ew[spring > 0].ravel()] = True
+        for _ in range(RINGS):
+            near[Ew[near[Ew].any(axis=1)].ravel()] = True
+        solve_at = np.flatnonzero(near & ~fixed)
 
     out = x[index]
     if keep is not None:
