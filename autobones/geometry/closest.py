@@ -36,6 +36,8 @@ def barycentric(P, A, B, C):
     return W / W.sum(axis=1, keepdims=True)
 
 
+# Fewer queries than one per FEW triangles take the near-triangle path: building the AABB tree over a
+# scan's every triangle then costs more than the queries themselves.
 FEW = 256
 
 

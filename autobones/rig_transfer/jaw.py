@@ -21,7 +21,10 @@ after each solve every edge off the lip line stepping by more than :data:`TARGET
 spring (1, then doubled each round up to :data:`SPRING_CAP`, at most :data:`ROUNDS` rounds); the springs matter where the
 Laplacian's own weights do not reach (long edges of sliver triangles, the robot's fans) and spread
 a falloff ring by ring. Where the carried weight is already smooth and agrees with the landmarks
-nothing but the mild data-term smoothing changes.
+nothing but the mild data-term smoothing changes. Only the jaw's surroundings are solved: vertices
+farther than :data:`REACH` face units from any jaw weight keep theirs (0), and the rounds after the
+first re-solve only :data:`RINGS` rings of edges around the springs, the rest held (on a dense scan a
+whole-face solve per round took seconds).
 
 Seeds (what the landmarks say), each the vertex nearest a landmark, or a band of vertices:
 
