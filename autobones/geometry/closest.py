@@ -95,7 +95,7 @@ def closest_points(P, V, F, labels=None, face_labels=None):
     sqrd : (n,) float64
         Squared distances, in squared mesh units.
     """
-    P = np.ascontiguousarray(P, dtype=np.float64)
+    P = np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3)
     if (labels is None or face_labels is None) and 0 < len(P) * FEW < len(F):
         # a few points on a large mesh (landmarks on a scan): an AABB tree over every triangle
         # costs more than the queries; only triangles that can hold a closest point are searched
@@ -107,6 +107,8 @@ def closest_points(P, V, F, labels=None, face_labels=None):
 
 def _closest(P, V, F, labels=None, face_labels=None):
     n = len(P)
+    if n == 0:
+        return np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros(0)
     C = np.empty((n, 3))
     face = np.empty(n, dtype=np.int64)
     sqrd = np.empty(n)

@@ -191,11 +191,7 @@ class LandmarkDetector:
         names = getattr(detector, "points", MEDIAPIPE_POINTS)
         mean = float(np.mean(list(found.confidence.values()))) if found.confidence else 0.0
         if len(found) < MIN_FOUND * len(names) or mean < MIN_CONFIDENCE:
-            raise NoFaceError(
-                f"no face read reliably in the renders of {what}: only {len(found)} of {len(names)} landmarks "
-                f"found, mean confidence {mean:.2f} (at least {int(np.ceil(MIN_FOUND * len(names)))} and "
-                f"{MIN_CONFIDENCE:g} needed); if the head's up or front was guessed wrong give --up/--front, "
-                f"else give its landmarks in a file (transfer --landmarks FILE, landmarks --from FILE)")
+            raise NoFaceError(_unreliable(what, len(found), len(names), mean))
         return found
 
     def _find_face(self, Vc, F, detector, what, search):
@@ -303,9 +299,9 @@ class LandmarkDetector:
         dev = np.linalg.norm(Xn - comb[None], axis=2) / unit_c          # (v, k)
         dev = np.where(wn > 0, dev, np.nan)
         spread = np.nanmedian(dev, axis=0) if len(cands) > 1 else np.zeros(len(names))
-        return self._finish(Fs, Vc, frame, names, comb, spread, unit_c, view_info, snap)
+        return self._finish(Fs, Vc, frame, names, comb, spread, unit_c, view_info, snap, what)
 
-    def _finish(self, F, Vc, frame, names, comb, spread, unit_c, view_info, snap):
+    def _finish(self, F, Vc, frame, names, comb, spread, unit_c, view_info, snap, what):
         """Drop, refine on the triangles ``F`` (the pictured skin), and snap onto it, or onto
         ``snap`` (the input's vertices and skin triangles) when the pictures were of a coarser copy."""
         points = {n: comb[i] for i, n in enumerate(names) if np.all(np.isfinite(comb[i]))}
@@ -324,7 +320,9 @@ class LandmarkDetector:
                 if n in dropped:            # stood in for by its mirrored partner
                     del dropped[n]
                     confidence[n] = 0.5 * confidence[mirror_name(n)]
-        P = np.array([points[n] for n in points])
+        if not points:  # every name dropped: nothing to snap, no face read
+            raise NoFaceError(_unreliable(what, 0, len(names), 0.0))
+        P = np.array([points[n] for n in points]).reshape(-1, 3)
         if snap is None:
             Pin = frame.from_canonical(closest_points(P, Vc, F)[0])
         else:
@@ -333,6 +331,14 @@ class LandmarkDetector:
         ordered = {n: ordered[n] for n in NAMES if n in ordered}
         return DetectedLandmarks(ordered, confidence, dropped, flagged, view_info, frame,
                                  unit=unit_c * frame.size)
+
+
+def _unreliable(what, found, names, mean):
+    """The one-line refusal of a reading with too few names or too little confidence."""
+    return (f"no face read reliably in the renders of {what}: only {found} of {names} landmarks found, mean "
+            f"confidence {mean:.2f} (at least {int(np.ceil(MIN_FOUND * names))} and {MIN_CONFIDENCE:g} needed); "
+            f"if the head's up or front was guessed wrong give --up/--front, else give its landmarks in a file "
+            f"(transfer --landmarks FILE, landmarks --from FILE)")
 
 
 def detect_landmarks(mesh, up=None, front=None, name=None, **options):
