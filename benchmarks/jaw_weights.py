@@ -18,6 +18,7 @@ is run with the jaw repair switched off ("before", the carried weight) and on ("
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 from unittest import mock
@@ -27,12 +28,13 @@ import numpy as np
 import autobones
 from autobones.io.landmarks import read_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.orient import frame_from_landmarks
 from autobones.rig_transfer import pipeline
 from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges, mouth_frame
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
+sys.path.insert(0, str(ROOT / "tests"))
+from shared_data import long_snout  # noqa: E402  (the test helpers' stretched-snout head)
 HEADS = {  # name: (mesh, landmark file); None: the built-in default head
     "default_head": (None, ROOT / "generic_rig" / "default_head.landmarks.json"),
     "ict_neutral": (DATA / "ict/generic_neutral_mesh.obj", DATA / "ict/generic_neutral_mesh.landmarks.json"),
@@ -46,21 +48,6 @@ HEADS = {  # name: (mesh, landmark file); None: the built-in default head
 }
 SNOUTS = {"james": (2.0, 4.0), "ict_identity002": (3.0,), "goat": (1.0,)}  # stretch factors k
 QUICK = ("goat", "robot", "james", "james_snout2")
-
-
-def long_snout(V, F, lm, k):
-    """The head with everything in front of the eye corners stretched by ``1 + k`` along its front
-    axis (the landmarks' frame), and the landmarks moved with it: (V, landmarks)."""
-    frame = frame_from_landmarks(V, F, lm)
-    eyes = [lm[n] for n in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r") if n in lm]
-    z0 = frame.to_canonical(np.array(eyes))[:, 2].mean()
-
-    def stretch(P):
-        Q = frame.to_canonical(np.asarray(P, dtype=np.float64))
-        Q[:, 2] += k * np.maximum(Q[:, 2] - z0, 0.0)
-        return frame.from_canonical(Q)
-
-    return stretch(V), {n: stretch(np.asarray(p)[None])[0] for n, p in lm.items()}
 
 
 def probes(V, lm):

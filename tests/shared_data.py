@@ -143,6 +143,24 @@ BLENDER_SCRIPT = ROOT / "tests" / "blender_check.py"
 BLENDER_INSTALL = "install it with: apt-get install blender python3-numpy (or bash tools/test-setup.sh)"
 
 
+def long_snout(V, F, lm, k):
+    """The head with everything in front of its eye corners stretched by ``1 + k`` along its front
+    axis (the landmarks' frame), the landmarks moved with it: a long-snouted animal's proportions on
+    a human's mesh. Returns (V, landmarks)."""
+    from autobones.orient import frame_from_landmarks
+
+    frame = frame_from_landmarks(V, F, lm)
+    eyes = [lm[n] for n in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r") if n in lm]
+    z0 = frame.to_canonical(np.array(eyes))[:, 2].mean()
+
+    def stretch(P):
+        Q = frame.to_canonical(np.asarray(P, dtype=np.float64))
+        Q[:, 2] += k * np.maximum(Q[:, 2] - z0, 0.0)
+        return frame.from_canonical(Q)
+
+    return stretch(V), {n: stretch(np.asarray(p)[None])[0] for n, p in lm.items()}
+
+
 def run_blender_check(glb, report_path):
     """Run tests/blender_check.py on ``glb`` in headless Blender; return its JSON report.
 

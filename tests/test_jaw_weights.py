@@ -10,28 +10,12 @@ import autobones
 from autobones.geometry.topology import mesh_parts
 from autobones.io.landmarks import read_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.orient import frame_from_landmarks
 from autobones.rig_transfer import pipeline
 from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges, mouth_frame, repair_jaw, with_jaw
 
-from shared_data import ROOT, data, flat_grid
+from shared_data import ROOT, data, flat_grid, long_snout
 
 TEST_LANDMARKS = ROOT / "tests" / "landmarks"
-
-
-def long_snout(V, F, lm, k):
-    """The head with everything in front of its eye corners stretched by ``1 + k`` along its front
-    axis, the landmarks moved with it: a long-snouted animal's proportions on a human's mesh."""
-    frame = frame_from_landmarks(V, F, lm)
-    eyes = [lm[n] for n in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r")]
-    z0 = frame.to_canonical(np.array(eyes))[:, 2].mean()
-
-    def stretch(P):
-        Q = frame.to_canonical(np.asarray(P, dtype=np.float64))
-        Q[:, 2] += k * np.maximum(Q[:, 2] - z0, 0.0)
-        return frame.from_canonical(Q)
-
-    return stretch(V), {n: stretch(np.asarray(p)[None])[0] for n, p in lm.items()}
 
 
 def _head(name):

@@ -162,16 +162,18 @@ def _carry_up(V, coarse, segments, heat):
     Wp = _heat(Vp, Fp, segments, heat, ordering="mmd_symmetric" if len(Vp) <= PROXY_ABOVE else "colamd")
     whole = kept >= 0
     rest = np.flatnonzero(~whole)
-    W = None if len(rest) == len(V) else np.empty((len(V), len(segments)))
-    if W is not None:
-        W[whole] = Wp[kept[whole]]
+    carried = None
     if len(rest):
         _, face, bary, _ = closest_points(V[rest], Vp, Fp, labels=part[rest], face_labels=face_part)
         # one sparse (rest, proxy) interpolation matrix, three entries a row in corner order: its
-        # product sums b0 W0 + b1 W1 + b2 W2 as the blocks did, with no (n, 3, b) temporaries
+        # product sums b0 W0 + b1 W1 + b2 W2, with no (n, 3, b) temporaries
         interp = sp.csr_matrix((bary.ravel(), Fp[face].ravel(), np.arange(0, 3 * len(rest) + 1, 3)),
                                shape=(len(rest), len(Vp)))
+        carried = interp @ Wp
         if len(rest) == len(V):
-            return interp @ Wp  # every part decimated (most scans): no second (n, b) array
-        W[rest] = interp @ Wp
+            return carried  # every part decimated (most scans): no second (n, b) array
+    W = np.empty((len(V), len(segments)))
+    W[whole] = Wp[kept[whole]]
+    if carried is not None:
+        W[rest] = carried
     return W

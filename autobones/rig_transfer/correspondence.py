@@ -266,9 +266,8 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         tlab = tgt_part if restrict_parts else np.full(nt, -1, dtype=np.int64)
         sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
         tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
-        area_t = tgt["area"]
         if len(sidx) and len(tq):
-            reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), tlab, sidx, tq, area_t)
+            reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), tlab, sidx, tq)
     if X0 is not None:
         X = X0.copy()
     match = _Matcher(V_tgt, F_tgt, tgt, labels, in_face, bidx, btrees, cos_max, exact, symmetric_weight, reverse)
@@ -319,8 +318,8 @@ class _Matcher:
             C[bidx] = V_tgt[self.btrees.query(X[bidx], labels[bidx])]
         C[~in_face] = X[~in_face]
         if self.reverse is not None:
-            area_s, tlab, sidx, tq, area_t = self.reverse
-            has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, tgt["N"], tlab, tq, area_t,
+            area_s, tlab, sidx, tq = self.reverse
+            has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, tgt["N"], tlab, tq, tgt["area"],
                                          tgt["trees"].big, self.cos_max)
             has[bidx] = False
             r = self.symmetric_weight * np.minimum(a[has] / area_s[has], 4.0)[:, None]
