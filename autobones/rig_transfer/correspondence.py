@@ -40,7 +40,16 @@ repeated linear least squares (Bibliowicz 2005, eq. 5.4)::
   coordinates: it is the uniform graph Laplacian, and with ``R = I, s = 1``
   its minimum is the source itself. We tried the bi-Laplacian form
   ``||L x - L x_tps||^2`` too: less accurate and its factor much larger
-  (see benchmarks/correspondence.py);
+  (see benchmarks/correspondence.py). Near the landmarks the reference edge
+  is the TPS-warped edge instead (``edge_reference="blend"``, the default):
+  weight 1 within ``REFERENCE_CORE`` of the nearest landmark, fading as a
+  Gaussian over ``REFERENCE_FALLOFF`` beyond (units: the landmarks' RMS
+  radius). The source's own edges there would pull an open jaw or a smile back
+  toward the neutral face: the chin slid up the target by 10-18% of ex-ex
+  with its landmarks held; far from the landmarks the warp's extrapolation
+  (the skull stretched by a dropped menton) is the worse guide. Full ARAP
+  rotations (Sorkine & Alexa 2007) instead of the normal tilt were tried and
+  let smooth regions turn about their normals: the scalp slid;
 - the binding term pulls mesh boundary vertices (neck cut, eye and mouth
   openings) to the target's boundary of the same part (beyond both papers):
   it is the only cue for where the neck ends;
@@ -193,17 +202,26 @@ def _source_terms(V_src, F_src, X, tps, P, edge_reference):
     D = sp.csr_matrix((np.r_[np.ones(m), -np.ones(m)], (np.r_[np.arange(m), np.arange(m)], np.r_[E[:, 0], E[:, 1]])),
                       shape=(m, n))
     DtD = (D.T @ D).tocsc()
+    def edge_normals(N):
+        ne = N[E[:, 0]] + N[E[:, 1]]
+        return ne / np.maximum(np.linalg.norm(ne, axis=1, keepdims=True), 1e-12)
+
     if edge_reference == "tps":
-        N_src = vertex_normals(X, F_src)
-        edge_src = X[E[:, 0]] - X[E[:, 1]]
+        edge_src, n_edge_src = X[E[:, 0]] - X[E[:, 1]], edge_normals(vertex_normals(X, F_src))
     else:
         # in the target file's axes: R_ij below only tilts the normal and cannot turn edges about it
         scale = abs(np.linalg.det(tps.affine_[1:])) ** (1.0 / 3.0)
         turn = axis_turn(tps.affine_[1:])
-        N_src = vertex_normals(V_src, F_src) @ turn
+        n_edge_src = edge_normals(vertex_normals(V_src, F_src) @ turn)
         edge_src = scale * (V_src[E[:, 0]] - V_src[E[:, 1]]) @ turn
-    n_edge_src = N_src[E[:, 0]] + N_src[E[:, 1]]
-    n_edge_src /= np.maximum(np.linalg.norm(n_edge_src, axis=1, keepdims=True), 1e-12)
+    if edge_reference == "blend":
+        # near the landmarks the warp's edges (turned into the source edge's normal frame, so one
+        # R_ij turns both): they carry the stretch an expression or a different face puts there
+        r = np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())
+        d = cKDTree(P).query(0.5 * (V_src[E[:, 0]] + V_src[E[:, 1]]))[0]
+        alpha = np.exp(-(np.maximum(d - REFERENCE_CORE * r, 0.0) / (REFERENCE_FALLOFF * r)) ** 2)[:, None]
+        warped = rotate_between(edge_normals(vertex_normals(X, F_src)), n_edge_src, X[E[:, 0]] - X[E[:, 1]])
+        edge_src = (1.0 - alpha) * edge_src + alpha * warped
     in_face = np.zeros(n, dtype=bool)
     in_face[F_src.ravel()] = True
     _, lface, lbary, _ = closest_points(P, V_src, F_src)
@@ -287,6 +305,12 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
     return X, labels, (t2 - t1, t3 - t2)
 
 
+# the blended reference (edge_reference="blend"): the landmark warp's shape within CORE, fading
+# over FALLOFF beyond it; both in units of the landmarks' RMS distance from their centroid
+REFERENCE_CORE = 0.5
+REFERENCE_FALLOFF = 0.5
+
+
 class _Matcher:
     """The data term's targets ``C`` (n, 3) for the current fit ``X`` (n, 3) with normals ``N``:
     closest target points (point-to-plane at the nearest vertex, or exact), rejected matches
@@ -328,7 +352,7 @@ class _Matcher:
 
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
-                landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="source", symmetric_weight=10.0, coarse_vertices=8000,
+                landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="blend", symmetric_weight=10.0, coarse_vertices=8000,
                 fine_stages=(3.0,), fine_iterations=2, timings=None):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
@@ -358,10 +382,12 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         Exact closest points (libigl AABB) in every iteration instead of
         point-to-plane at the nearest target vertex (slower, no more accurate
         in benchmarks/correspondence.py).
-    edge_reference : {"source", "tps"}
-        Reference edge vectors of the shape term: the source's own edges
-        times the landmark scale (default), or the TPS-warped edges (keeps
-        an anisotropic or sheared landmark warp).
+    edge_reference : {"blend", "source", "tps"}
+        Reference edge vectors of the shape term: the TPS-warped edges near
+        the landmarks and the source's own edges times the landmark scale far
+        from them (default; module doc), the source's everywhere, or the
+        TPS-warped edges everywhere (keeps an anisotropic or sheared landmark
+        warp, but also its extrapolation over the skull and neck).
     symmetric_weight : float
         Weight of the reverse (target -> source) distance term relative to the
         forward one, for a source vertex receiving its own area; 0: off.
@@ -396,8 +422,8 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
     if not len(stages) or min(stages) <= 0 or iterations < 1 or not len(fine_stages) or min(fine_stages) <= 0 \
             or fine_iterations < 1:
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
-    if edge_reference not in ("source", "tps"):
-        raise AutobonesError(f"edge_reference must be 'source' or 'tps', got {edge_reference!r}")
+    if edge_reference not in ("source", "tps", "blend"):
+        raise AutobonesError(f"edge_reference must be 'blend', 'source' or 'tps', got {edge_reference!r}")
     tps = ThinPlateSpline().fit(P, Q)
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight, {})

@@ -314,6 +314,21 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
         bad = check & (jump > TARGET_JUMP)
         if not bad.any():
             break
+        # a step against a fixed vertex that the strongest spring could not even out (the robot's
+        # nose tip, pinned at 0, a few edges above its chin): the free end is pinned one allowed
+        # step from the fixed one, and the next rounds spread the rest of the falloff behind it
+        stuck = bad & (spring >= SPRING_CAP) & (fixed[Ew[:, 0]] != fixed[Ew[:, 1]])
+        if stuck.any():
+            a = np.where(fixed[Ew[stuck, 0]], Ew[stuck, 0], Ew[stuck, 1])
+            b = np.where(fixed[Ew[stuck, 0]], Ew[stuck, 1], Ew[stuck, 0])
+            step = np.clip(x[b], x[a] - TARGET_JUMP, x[a] + TARGET_JUMP)
+            pin = np.full(nw, np.inf)
+            np.minimum.at(pin, b, np.where(step < x[b], step, np.inf))   # lowered: the lowest bound
+            high = np.full(nw, -np.inf)
+            np.maximum.at(high, b, np.where(step > x[b], step, -np.inf))
+            x = np.where(np.isfinite(pin), pin, np.where(np.isfinite(high), high, x))
+            fixed[b] = True
+            check = ~on_line_w & ~(fixed[Ew[:, 0]] & fixed[Ew[:, 1]])
         spring[bad] = np.minimum(np.maximum(2.0 * spring[bad], 1.0), SPRING_CAP)
         # later rounds re-solve only around the springs (RINGS rings of edges): the screened field
         # decays within a few edges, and a whole face's solve per round took seconds on dense scans

@@ -30,7 +30,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 # What the tests read (grep data(" in tests/*.py, the SMALL list and _variants of test_batch.py, the
 # KNOWN table of test_orient.py, and every */*.landmarks.json that test_landmarks.py reads).
 FILES = {
-    "ict": ["generic_neutral_mesh.obj", "identity000.obj", "identity001.obj", "identity002.obj", "jawOpen.obj",
+    "ict": ["generic_neutral_mesh.obj", "identity000.obj", "identity001.obj", "identity002.obj", "jawOpen.obj", "mouthSmile_L.obj",
             "generic_neutral_mesh.landmarks.json", "identity000.landmarks.json", "identity001.landmarks.json",
             "identity002.landmarks.json", "LICENSE"],
     "menpo3d": ["james.obj", "template.ply", "james.landmarks.json", "template.landmarks.json"],
