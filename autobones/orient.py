@@ -49,6 +49,8 @@ AXES = {
 }
 
 SAMPLE_COUNT = 3000
+# vector area / area above which an open surface is a face-only capture, not a head with a neck cut
+OPEN_SHELL = 0.22
 
 
 @dataclass(frozen=True)
@@ -162,6 +164,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         sym_err, normal, offset = best[0] / rms, best[1], best[2]
         candidates = _candidates(normal, up_v, front_v)
 
+    ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
     if len(candidates) > 1 and up_v is None:
         # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
         bases, cues = {}, _cut_cues(V, F)
@@ -172,9 +175,18 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         ranked = sorted(bases.values(), reverse=True)
         if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1]:
             winner = max(bases, key=bases.get)
-            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
+            facing = _open_shell_facing(cues)
+            if facing is not None and np.array(winner) @ facing > 0.7:
+                # a face-only capture: the opening is the back, not the bottom; it faces away from it,
+                # and it is scored against as deep a front part of the reference head
+                candidates = [(u, f) for u, f in candidates if f @ facing > 0.7] or candidates
+                depth = np.ptp(P @ facing) / max(np.ptp(P @ normal), 1e-300)
+                z = ref[:, 2]
+                front_part = ref[z >= z.max() - depth * np.ptp(ref[:, 0])]
+                ref = front_part if len(front_part) >= 0.1 * len(ref) else ref
+            else:
+                candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
     if len(candidates) > 1:
-        ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
         scores = [_overlay_score(P, u, f, ref) for u, f in candidates]
         up_d, front_d = candidates[int(np.argmin(scores))]
     else:
@@ -229,6 +241,20 @@ def _cut_cues(V, F):
     return {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
             "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
             "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
+
+
+def _open_shell_facing(cues):
+    """The direction an open shell faces (unit (3,)), or None for a closed or nearly closed surface.
+
+    A closed surface's area-weighted normals sum to zero; an open one's sum to the vector area of
+    its missing cap, pointing away from the opening. A neck cut leaves a small cap (ICT's full head:
+    13% of the surface's area), a face-only capture a cap as large as its face (a head cut in half
+    behind the ears: 28-50%, a face scan 45-64%)."""
+    vec = (cues["normal"] * cues["area2"][:, None]).sum(axis=0)
+    size = np.linalg.norm(vec)
+    if size <= OPEN_SHELL * cues["area2"].sum():
+        return None
+    return vec / size
 
 
 def _base_score(cues, up):

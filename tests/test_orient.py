@@ -49,6 +49,31 @@ def test_detects_up_and_front_of_shared_heads(rel):
     assert np.linalg.det(R) > 0
 
 
+FACE_ONLY = ["ict/identity000.obj", "misc/LeePerrySmith.obj", "misc/demosthenes-low-res.obj",
+             "misc/fsaverage_head.obj", "menpo3d/james.obj"]
+
+
+@pytest.mark.parametrize("rel", FACE_ONLY)
+@pytest.mark.parametrize("depth", [0.5, 0.25])
+def test_face_only_captures_stand_up_and_face_front(rel, depth):
+    """A face-only capture (a head kept only in front of a cut: the front half, or the front quarter,
+    of its depth) faces away from its opening; its rim is not a neck cut. Before, ICT's and
+    Demosthenes' front halves came out looking down (up = the face's direction) in every frame."""
+    V, F = load_mesh(data(rel))
+    full = detect_frame(V, F)
+    C = full.to_canonical(V)
+    keep = C[:, 2] > C[:, 2].max() - depth * np.ptp(C[:, 2])
+    Fk = F[keep[F].all(axis=1)]
+    used = np.unique(Fk)
+    index = np.full(len(V), -1)
+    index[used] = np.arange(len(used))
+    Vk, Fk = V[used], index[Fk]
+    for Q in rotations24()[::3]:
+        frame = detect_frame(Vk @ Q.T, Fk)
+        assert frame.rotation[1] @ (Q @ full.rotation[1]) > 0.9, (frame.up, frame.front)
+        assert frame.rotation[2] @ (Q @ full.rotation[2]) > 0.9, (frame.up, frame.front)
+
+
 def test_frame_round_trip():
     V, F = load_mesh(data("misc/LeePerrySmith.obj"))
     frame = detect_frame(V, F)
