@@ -49,8 +49,11 @@ AXES = {
 }
 
 SAMPLE_COUNT = 3000
-# vector area / area above which an open surface is a face-only capture, not a head with a neck cut
+# vector area / area of an open surface (orient._open_shell_facing): above OPEN_SHELL a clear cut
+# opposite the way it faces is its back (a face-only capture), not a neck cut; above FACE_SHELL it is
+# a face-only capture whatever its rim looks like
 OPEN_SHELL = 0.22
+FACE_SHELL = 0.4
 
 
 @dataclass(frozen=True)
@@ -168,24 +171,26 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     if len(candidates) > 1 and up_v is None:
         # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
         bases, cues = {}, _cut_cues(V, F)
+        facing, openness = _open_shell_facing(cues)
+        mask = [(u, f) for u, f in candidates if f @ facing > 0.7]
         for u, _ in candidates:
             key = tuple(np.round(u, 6))
             if key not in bases:
                 bases[key] = _base_score(cues, u)
         ranked = sorted(bases.values(), reverse=True)
-        if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1]:
-            winner = max(bases, key=bases.get)
-            facing = _open_shell_facing(cues)
-            if facing is not None and np.array(winner) @ facing > 0.7:
-                # a face-only capture: the opening is the back, not the bottom; it faces away from it,
-                # and it is scored against as deep a front part of the reference head
-                candidates = [(u, f) for u, f in candidates if f @ facing > 0.7] or candidates
-                depth = np.ptp(P @ facing) / max(np.ptp(P @ normal), 1e-300)
-                z = ref[:, 2]
-                front_part = ref[z >= z.max() - depth * np.ptp(ref[:, 0])]
-                ref = front_part if len(front_part) >= 0.1 * len(ref) else ref
-            else:
-                candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
+        winner = max(bases, key=bases.get) if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1] else None
+        # a face-only capture faces away from its opening, which is its back, not its bottom: a shell
+        # open that wide, or one whose clear "cut" lies opposite the way it faces
+        if mask and (openness > FACE_SHELL or (openness > OPEN_SHELL and winner is not None
+                                               and np.array(winner) @ facing > 0.7)):
+            candidates = mask
+            # scored against as deep a front part of the reference head
+            depth = np.ptp(P @ facing) / max(np.ptp(P @ normal), 1e-300)
+            z = ref[:, 2]
+            front_part = ref[z >= z.max() - depth * np.ptp(ref[:, 0])]
+            ref = front_part if len(front_part) >= 0.1 * len(ref) else ref
+        elif winner is not None:
+            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
     if len(candidates) > 1:
         scores = [_overlay_score(P, u, f, ref) for u, f in candidates]
         up_d, front_d = candidates[int(np.argmin(scores))]
@@ -244,17 +249,24 @@ def _cut_cues(V, F):
 
 
 def _open_shell_facing(cues):
-    """The direction an open shell faces (unit (3,)), or None for a closed or nearly closed surface.
+    """The direction an open surface faces (unit (3,)) and how open it is (its vector area over
+    its area, 0 for a closed surface, up to 1 for a flat sheet).
 
     A closed surface's area-weighted normals sum to zero; an open one's sum to the vector area of
-    its missing cap, pointing away from the opening. A neck cut leaves a small cap (ICT's full head:
-    13% of the surface's area), a face-only capture a cap as large as its face (a head cut in half
-    behind the ears: 28-50%, a face scan 45-64%)."""
+    its missing cap, pointing away from the opening (or toward it, when the triangles wind inward:
+    the sign is taken from which way the surface bulges from its open rim). A neck cut leaves a small cap (ICT's full head:
+    13% of the surface's area, the bust and full heads of the shared set less), a face-only capture
+    a cap as large as its face (a head cut in half behind the ears: 28-50%, a face scan 43-64%).
+    """
     vec = (cues["normal"] * cues["area2"][:, None]).sum(axis=0)
     size = np.linalg.norm(vec)
-    if size <= OPEN_SHELL * cues["area2"].sum():
-        return None
-    return vec / size
+    if len(cues["rim_length"]) and cues["rim_length"].sum() > 0:
+        # the sign from the shape, not the winding (scans come with inward normals too: fran_cut):
+        # the surface bulges away from its opening
+        bulge = (cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
+                 - cues["rim_length"] @ cues["rim_mid"] / cues["rim_length"].sum())
+        vec = -vec if bulge @ vec < 0 else vec
+    return vec / max(size, 1e-300), float(size / max(cues["area2"].sum(), 1e-300))
 
 
 def _base_score(cues, up):
