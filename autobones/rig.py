@@ -31,7 +31,7 @@ def sidecar_paths(glb_path):
 # (keys of ``Rig.other`` go just before ``expressions``, which ``save`` writes last).
 SIDECAR_KEYS = ("source", "muscles", "landmarks", "landmark_confidence", "landmarks_dropped", "landmarks_flagged",
                 "field_labels", "reliable_fraction", "facial_bone_partner", "neck_height_canonical", "batch",
-                "expressions")
+                "arkit", "expressions")
 
 
 def sidecar_attributes(doc):
@@ -107,8 +107,14 @@ class Rig:
         ``place`` without landmarks: height of the neck cut in the canonical frame (head sizes).
     batch : dict or None
         ``autobones batch``: ``{"options": ..., "options_hash": ...}``.
+    arkit : dict or None
+        The ARKit shape record (``transfer(..., arkit=True)``; :func:`autobones.arkit.targets.arkit_targets`):
+        names, source, method, per-shape triangles turned over at weight 1.
     expressions : dict or None
         A loaded rig's expression record (:meth:`expression_record`; ``definitions`` inside).
+    arkit_targets : dict str -> (n, 3) float or None
+        The 52 ARKit displacement fields (input frame and units), written as glTF morph targets
+        named as ARKit does and read back from the glb by ``load_rig``; not in the sidecar.
     other : dict
         Sidecar keys of a loaded rig that this version does not know, written back unchanged.
     """
@@ -135,7 +141,9 @@ class Rig:
     facial_bone_partner: Optional[list] = None
     neck_height_canonical: Optional[float] = None
     batch: Optional[dict] = None
+    arkit: Optional[dict] = None
     expressions: Optional[dict] = None
+    arkit_targets: Optional[dict] = None
     other: dict = field(default_factory=dict)
 
     def sidecar_extra(self):
@@ -216,14 +224,52 @@ class Rig:
         return cached
 
     def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
-             head_deg=None, neck_deg=None):
+             head_deg=None, neck_deg=None, arkit=None):
         """Posed vertices (n, 3), input frame and units: FACS action units (``au={12: 0.8}``,
         ``"12L"`` for one side), an emotion (``expression="happiness"``), muscle contractions,
         jaw opening in degrees, eyelids, eye gaze and head/neck rotations; see
-        :meth:`autobones.expressions.ExpressionModel.pose`. All zero: the vertices, exactly."""
-        return self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
-                                            eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
-                                            neck_deg=neck_deg)
+        :meth:`autobones.expressions.ExpressionModel.pose`. All zero: the vertices, exactly.
+
+        ``arkit={"jawOpen": 0.6}``: ARKit shape weights (rigs made with ``arkit=True``). Their
+        displacements add on top of everything else, unrotated: alone they give exactly what a
+        glTF player gives (rest + sum of weight x target); mixed with AUs, the jaw or head/eye
+        turns, both act and nothing wins (an AU jaw opening plus ``jawOpen`` opens twice; glTF
+        players would also turn the targets with the bones)."""
+        offset = self.arkit_offset(arkit)
+        only_arkit = (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
+                      and gaze is None and look_at is None and head_deg is None and neck_deg is None)
+        if offset is not None and only_arkit:  # no model needed (a rig without muscles poses too)
+            base = np.asarray(self.vertices, dtype=np.float64)
+        else:
+            base = self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
+                                                eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
+                                                neck_deg=neck_deg)
+        return base if offset is None else base + offset
+
+    def arkit_offset(self, weights):
+        """Sum of ``weight * target`` (n, 3) of the ARKit shapes ``weights`` (dict name -> float),
+        or None when there are none; AutobonesError for a name the rig has no target for."""
+        if not weights:
+            return None
+        targets = self.arkit_targets or {}
+        if not targets:
+            raise AutobonesError("this rig has no ARKit shapes; make it with autobones transfer HEAD --arkit "
+                                 "(or autobones.transfer(..., arkit=True))")
+        out = np.zeros((len(self.vertices), 3))
+        for name, w in weights.items():
+            if name not in targets:
+                close = [n for n in targets if n.lower() == str(name).lower()]
+                raise AutobonesError(f"unknown ARKit shape {name!r}"
+                                     + (f" (did you mean {close[0]!r}?)" if close else
+                                        f"; the rig has {', '.join(list(targets)[:6])}, ... ({len(targets)})"))
+            try:
+                w = float(w)
+            except (TypeError, ValueError):
+                raise AutobonesError(f"ARKit shape {name}: weight {w!r} is not a number") from None
+            if not np.isfinite(w):
+                raise AutobonesError(f"ARKit shape {name}: weight {w} is not finite")
+            out += w * np.asarray(targets[name], dtype=np.float64)
+        return out
 
     def expression_record(self, targets=(), skipped=()):
         """The sidecar's ``expressions`` entry (rigs with muscles; None otherwise): the definitions
@@ -278,6 +324,8 @@ class Rig:
 
             morphs, skipped = au_morph_targets(self.expression_model(), expressions)
         record = self.expression_record(morphs, skipped)
+        if self.arkit_targets:  # after the AUs: named as ARKit does (mesh.extras.targetNames)
+            morphs = list(morphs) + list(self.arkit_targets.items())
         side = self.sidecar()
         if record is not None:
             side["expressions"] = record

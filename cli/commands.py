@@ -55,7 +55,8 @@ def cmd_transfer(args):
     out = args.output or _default_out(args.head)
     _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
-    rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front)
+    rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
+                             arkit=args.arkit)
     written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
     if rig.options.get("landmarks_source") == "detected":
         conf = rig.landmark_confidence or {}
@@ -67,8 +68,18 @@ def cmd_transfer(args):
           f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
           f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
           f"sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}"
-          + (f"; {_morph_target_count(written[1])} morph targets" if args.expressions or args.expression_sides else ""))
+          + (f"; {_morph_target_count(written[1])} morph targets" if args.expressions or args.expression_sides else "")
+          + (f"; {len(rig.arkit_targets)} ARKit shapes" + _flipped_note(rig.arkit) if args.arkit else ""))
     return 0
+
+
+def _flipped_note(record):
+    """``; triangles turned over at weight 1: mouthClose 5 (ICT's own 597), ...`` for the shapes that fold any."""
+    record = record or {}
+    src = record.get("source_flipped_triangles", {})
+    bad = {n: c for n, c in record.get("flipped_triangles", {}).items() if c}
+    return ("; triangles turned over at weight 1: " + ", ".join(f"{n} {c} (ICT's own {src.get(n, 0)})"
+                                                              for n, c in bad.items())) if bad else ""
 
 
 def _morph_target_count(sidecar):
@@ -91,6 +102,7 @@ def cmd_pose(args):
     expression = pairs(args.expression, "--expression", default=1.0)
     muscles = pairs(args.muscle, "--muscle")
     eyelids = pairs(args.eyelids, "--eyelids")
+    arkit = pairs(args.arkit, "--arkit", default=1.0)
     jaw = number(args.jaw, "--jaw")
     gaze, look_at = vector(args.gaze, 2, "--gaze"), vector(args.look_at, 3, "--look-at")
     head_deg, neck_deg = vector(args.head_deg, 3, "--head"), vector(args.neck_deg, 3, "--neck")
@@ -99,18 +111,20 @@ def cmd_pose(args):
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
     _never_the_input([out], [*_rig_outputs(args.rig), args.definitions])
     rig = autobones.load_rig(args.rig)
-    if not rig.muscles:
+    if not rig.muscles and not (arkit and rig.arkit_targets):
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
     if args.definitions:
         rig.expression_model(args.definitions)  # pose uses the model built last
     V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
-                 eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg)
+                 eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
+                 arkit=arkit or None)
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
                      + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
                      + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
                      + ([f"gaze {args.gaze}"] if gaze else []) + ([f"look at {args.look_at}"] if look_at else [])
-                     + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else []))
+                     + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else [])
+                     + [f"{k} {v:g}" for k, v in arkit.items()])
     write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
     moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0
     print(f"{out}: {what or 'neutral'}; {len(V)} vertices, largest displacement {moved:.4g} "
@@ -172,7 +186,7 @@ def cmd_batch(args):
     from autobones.batch import make_options, run_batch, summary_table
 
     options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
-                           expressions="sides" if args.expression_sides else args.expressions)
+                           expressions="sides" if args.expression_sides else args.expressions, arkit=args.arkit)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
 
@@ -212,5 +226,74 @@ def cmd_batch(args):
     return 0 if report["counts"]["failed"] == 0 else 1
 
 
+def cmd_view(args):
+    from autobones.view import make_server
+
+    server = make_server(args.path, args.port)
+    print(server.url, flush=True)  # first line: scripts read the URL from here
+    print(f"autobones view: showing {args.path} ({server.site.mode}); Ctrl-C to stop", file=sys.stderr, flush=True)
+    if not args.no_browser:
+        import webbrowser
+
+        webbrowser.open(server.url)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        print("autobones view: stopped", file=sys.stderr)
+    finally:
+        server.server_close()
+    return 0
+
+
+def cmd_export(args):
+    from autobones.errors import AutobonesError
+    from autobones.export import export_format
+
+    fmt = export_format(args.output)
+    _never_the_input([args.output], [args.rig, *_rig_outputs(args.rig)[1:]])
+    t = time.perf_counter()
+    if fmt == "usd":
+        from autobones.export.usd import write_usd
+
+        r = write_usd(args.rig, args.output, meters_per_unit=args.meters_per_unit)
+        errors = [f for f in r["validation"] if f[0] == "Error"]
+        print(f"{r['path']}: UsdSkel, {r['joints']} joints, {r['vertices']} vertices, {r['influences']} influences per "
+              f"vertex, {r['blend_shapes']} blend shapes, {r['animations']} animations; upAxis {r['up_axis']}, "
+              f"metersPerUnit {r['meters_per_unit']:g}; USD validation: {len(errors)} errors, "
+              f"{len(r['validation']) - len(errors)} warnings; {time.perf_counter() - t:.1f} s")
+        for kind, name, message in r["validation"]:
+            print(f"  {kind} {name}: {message}", file=sys.stderr)
+        return 0
+    if args.meters_per_unit is not None:
+        raise AutobonesError("--meters-per-unit applies to USD output only")
+    from autobones.export.fbx import write_fbx
+
+    r = write_fbx(args.rig, args.output)
+    print(f"{r['path']}: FBX (Blender {r['blender']}), {r['bones']} bones, {r['vertices']} vertices, "
+          f"{r['influences']} influences per vertex, {r['shape_keys']} shape keys, {r['markers']} markers, "
+          f"{r['animations']} animations; {time.perf_counter() - t:.1f} s")
+    return 0
+
+
+def cmd_animate(args):
+    from autobones.arkit.animation import capture_glb
+    from autobones.arkit.capture import read_capture
+    from autobones.errors import AutobonesError
+    from autobones.io.atomic import write_bytes_atomic
+
+    if not args.output.lower().endswith(".glb"):
+        raise AutobonesError(f"{args.output}: the animation is written as a .glb")
+    _never_the_input([args.output], [*_rig_outputs(args.rig), args.capture])
+    t = time.perf_counter()
+    capture = read_capture(args.capture, fps=number(args.fps, "--fps"))
+    data = capture_glb(args.rig, capture, bones=not args.no_bones)
+    write_bytes_atomic(args.output, data, "the animation")
+    print(f"{args.output}: {len(capture.times)} frames, {capture.times[-1]:.2f} s, {len(capture.weights)} ARKit "
+          f"shapes" + ("" if args.no_bones or not capture.angles else ", head and eye turns")
+          + f", {time.perf_counter() - t:.1f} s")
+    return 0
+
+
 COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
-            "build-rig": cmd_build_rig, "batch": cmd_batch}
+            "build-rig": cmd_build_rig, "batch": cmd_batch, "view": cmd_view,
+            "export": cmd_export, "animate": cmd_animate}

@@ -82,6 +82,47 @@ exit code: 0 when every file is ok or up to date, 1 when any file failed, 2 for 
 command (missing folder, overlapping folders, bad option).
 """
 
+VIEW_EPILOG = """\
+examples:
+  autobones view head.glb                 one rig: orbit, pose, weights, expressions, landmarks, muscles
+  autobones view rigs/                    a batch output folder: thumbnails and the QA report; click to open
+  autobones view rigs/ --no-browser --port 8765       print the URL only (a remote machine: ssh -L 8765:...)
+
+The first line printed is the page's URL (http://127.0.0.1:PORT/); the server listens on
+127.0.0.1 only, serves only the files under the rig's folder (or the folder given), never
+writes anything, and stops with Ctrl-C. three.js is bundled: no network is needed.
+
+on the rig page: drag to orbit, wheel to zoom; colour the skin by a bone's weight (the glb's
+4 largest influences or the full matrix of x.weights.npz); pitch/yaw/roll sliders per bone
+(degrees, about the head frame's axes; pitch > 0 opens the jaw, nods the head down); a
+slider per morph target (AU1..., 0..1); landmarks, muscles and the skeleton on request.
+"""
+
+EXPORT_EPILOG = """\
+examples:
+  autobones export head.glb -o head.usda          UsdSkel as text (.usdc / .usd: binary, .usdz: package)
+  autobones export head.glb -o head.fbx           FBX through Blender run headless (Blender on PATH)
+  autobones export scan.glb -o scan.usdc --meters-per-unit 0.01     a scan in centimetres, said outright
+
+RIG.glb is what place, transfer or batch wrote, with RIG.rig.json and RIG.weights.npz
+beside it (the weights file holds every influence; the glb only the four largest).
+
+USD (needs usd-core: pip install 'autobones[usd]'): SkelRoot /Rig with a Skeleton (one joint
+per bone, joint paths neck/head/jaw..., bind = rest = the glb's pose), the Mesh bound with every
+non-zero weight per vertex, one BlendShape per morph target (AU12...), a SkelAnimation per glb
+animation, and the frame, landmarks and muscles in /Rig's customData["autobones"]. Points stay in
+the rig's own frame and units. upAxis: Y or Z when the rig's up is +y or +z, else Y with a
+rotation on /Rig. metersPerUnit: the power of ten that makes the head about 0.3 m (a metre,
+centimetre or millimetre human head comes out right); give --meters-per-unit otherwise.
+The file is checked with USD's own validators; their findings are listed on stderr.
+
+FBX (needs Blender >= 3.4 on PATH; Debian: apt-get install blender): armature, mesh with one
+vertex group per bone holding every weight, shape keys, muscle markers as empties, Y up.
+
+bad input (not an autobones glb, sidecars missing, unknown suffix, -o = the input): one line,
+exit code 2, nothing written.
+"""
+
 
 def pose_epilog():
     """The pose command's help: examples, then the AUs and emotions of the data file."""
@@ -125,4 +166,17 @@ action units (generic_rig/expressions.json):
 
 emotions (Erdoğdu 2010, Table 3-3):
 {emotions}
+"""
+
+
+ANIMATE_EPILOG = """\
+examples:
+  autobones transfer head.obj --landmarks head.landmarks.json --arkit -o head.glb
+  autobones animate head.glb --capture take.csv -o take.glb
+
+The CSV is what Live Link Face records: a header Timecode, BlendShapeCount, one column per ARKit
+shape (EyeBlinkLeft ... TongueOut, ARKit's names capitalised; Left is the subject's left), then
+HeadYaw, HeadPitch, HeadRoll, LeftEyeYaw ... RightEyeRoll in radians (optional); one row per
+frame, Timecode HH:MM:SS:FF.fff increasing. An unknown column, a bad row or a time that does not
+increase is refused (exit 2) and nothing is written.
 """

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from .help_texts import BATCH_EPILOG, BUILD_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG, TRANSFER_EPILOG, pose_epilog
+from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BUILD_EPILOG, EXPORT_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG,
+                         TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
 
 
 def build_parser():
@@ -19,6 +20,9 @@ def build_parser():
     add_landmarks(sub)
     add_build_rig(sub)
     add_batch(sub)
+    add_view(sub)
+    add_export(sub)
+    add_animate(sub)
     return parser
 
 
@@ -65,6 +69,10 @@ def add_transfer(sub):
     t.add_argument("--expression-sides", action="store_true",
                    help="with the morph targets, also each AU's left and right halves (AU12L, AU12R); "
                         "implies --expressions")
+    t.add_argument("--arkit", action="store_true",
+                   help="also write ARKit's 52 face blendshapes as morph targets named as ARKit does (eyeBlinkLeft, "
+                        "jawOpen, ...; Left = the subject's left), made for this head from ICT-FaceKit's set by "
+                        "deformation transfer; tongueOut is written empty (ICT has none)")
     _common(t)
 
 
@@ -91,6 +99,9 @@ def add_pose(sub):
     q.add_argument("--look-at", metavar="X,Y,Z", help="a point (rig frame and units) both eyes aim at")
     q.add_argument("--head", dest="head_deg", metavar="PITCH,YAW,ROLL", help="head rotation, degrees")
     q.add_argument("--neck", dest="neck_deg", metavar="PITCH,YAW,ROLL", help="neck rotation, degrees")
+    q.add_argument("--arkit", action="append", default=[], metavar="NAME=W",
+                   help="an ARKit shape (jawOpen, eyeBlinkLeft, ...) at weight W (default 1), on a rig made with "
+                        "transfer --arkit; repeat to mix; adds on top of AUs and bones")
     q.add_argument("--definitions", metavar="FILE",
                    help="expression definitions to pose with (format of generic_rig/expressions.json) instead "
                         "of the ones the rig's sidecar kept")
@@ -151,6 +162,9 @@ def add_batch(sub):
                    help="with --transfer: one morph target per FACS action unit in each glb (see `autobones pose --help`)")
     a.add_argument("--expression-sides", action="store_true",
                    help="with --transfer: also each AU's left and right halves (AU12L, AU12R); implies --expressions")
+    a.add_argument("--arkit", action="store_true",
+                   help="with --transfer: ARKit's 52 face blendshapes as morph targets in each glb "
+                        "(see transfer --help)")
     a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
     a.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "
@@ -159,6 +173,58 @@ def add_batch(sub):
                    help="overwrite outputs that exist but are out of date or made with other options")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary table")
     _common(a)
+
+
+def add_view(sub):
+    """The ``view`` command's arguments."""
+    w = sub.add_parser(
+        "view", help="look at a rig or a batch output folder in the browser (local, read-only)",
+        description="Serve a page on 127.0.0.1 showing one rig (orbit, pose the bones, colour the skin by a "
+                    "bone's weight, morph target sliders, landmarks and muscles) or a batch output folder "
+                    "(thumbnails, status and warnings from the report, filters). Stops with Ctrl-C.",
+        epilog=VIEW_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    w.add_argument("path", metavar="RIG.glb|FOLDER", help="a rig written by autobones (its sidecars beside it) or "
+                                                            "a folder written by `autobones batch`")
+    w.add_argument("--port", default="0", help="port on 127.0.0.1 (default: a free one)")
+    w.add_argument("--no-browser", action="store_true", help="do not open the system browser; print the URL only")
+    _common(w)
+
+
+def add_export(sub):
+    """The ``export`` command's arguments."""
+    e = sub.add_parser(
+        "export", help="write a saved rig as USD (UsdSkel) or FBX (through Blender)",
+        description="Write a rig saved by autobones (RIG.glb with RIG.rig.json and RIG.weights.npz beside it) "
+                    "for other pipelines: USD (.usd/.usda/.usdc/.usdz, UsdSkel: skeleton, every skin weight, "
+                    "blend shapes, animation) or FBX (armature, vertex groups, shape keys; Blender runs headless). "
+                    "The suffix of -o picks the format.",
+        epilog=EXPORT_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    e.add_argument("rig", metavar="RIG.glb",
+                   help="a glb written by autobones (place, transfer, batch), its sidecars beside it")
+    e.add_argument("-o", "--output", required=True, metavar="OUT",
+                   help="OUT.usda, OUT.usdc, OUT.usd, OUT.usdz or OUT.fbx")
+    e.add_argument("--meters-per-unit", type=float, metavar="M",
+                   help="USD: metres per mesh unit (default: guessed from the head size, see below)")
+    _common(e)
+
+
+def add_animate(sub):
+    """The ``animate`` command's arguments."""
+    n = sub.add_parser(
+        "animate", help="turn a face-capture recording (Live Link Face CSV) into a glTF animation of a rig",
+        description="Copy a rig made with `autobones transfer --arkit` with one animation added: the recording's "
+                    "52 ARKit shape weights as morph-target weight keys, and its head and eye angles as "
+                    "rotations of the head and eye joints. Plays in three.js, Blender and engines.",
+        epilog=ANIMATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    n.add_argument("rig", metavar="RIG.glb", help="a glb written by autobones transfer --arkit (sidecars beside it)")
+    n.add_argument("--capture", required=True, metavar="TAKE.csv",
+                   help="a Live Link Face CSV: Timecode, BlendShapeCount, EyeBlinkLeft ... TongueOut, "
+                        "HeadYaw ... RightEyeRoll")
+    n.add_argument("-o", "--output", required=True, metavar="OUT.glb", help="the animated glb to write")
+    n.add_argument("--fps", default="60",
+                   help="frame rate of the timecode's frame field (default 60, Live Link Face's)")
+    n.add_argument("--no-bones", action="store_true", help="morph-target weights only, no head and eye turns")
+    _common(n)
 
 
 def _axes(p, note=""):

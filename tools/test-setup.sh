@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Everything the tests need beyond `pip install .`: Python test packages and the optional
-# face detector (MediaPipe, for `autobones landmarks`), Blender 3.4
+# face detector (MediaPipe, for `autobones landmarks`), Chromium (the viewer's browser test), Blender 3.4
 # (a real glTF client, headless) with the numpy its glTF importer needs, and the Khronos
 # glTF validator (npm). Idempotent; run as root (or with sudo) on Debian/Ubuntu.
 set -euo pipefail
@@ -10,6 +10,8 @@ need=()
 command -v blender >/dev/null || need+=(blender)
 dpkg -s python3-numpy >/dev/null 2>&1 || need+=(python3-numpy)
 command -v node >/dev/null || need+=(nodejs npm)
+# headless Chromium for tests/test_view.py (playwright drives this one; it never downloads its own)
+command -v chromium >/dev/null || need+=(chromium)
 if ((${#need[@]})); then
   SUDO=$([ "$(id -u)" = 0 ] && echo "" || echo sudo)
   $SUDO apt-get update -qq

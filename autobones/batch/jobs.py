@@ -21,20 +21,23 @@ LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
 # ---------------------------------------------------------------------------------------------
 # options and naming
 
-def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False):
+def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False, arkit=False):
     """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
 
     ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
     options mean the same thing on every worker. ``expressions`` (transfer only: True or
     ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
-    when set, so other batches keep their options hash.
+    when set, so other batches keep their options hash. ``arkit`` (transfer only) adds the 52
+    ARKit shapes (``transfer(..., arkit=True)``), the same way.
     """
     from ..placement.facial_bones import DENSITIES, bone_count
 
     if transfer:
         return {"mode": "transfer", "density": None,
                 "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
-                **({"expressions": expressions} if expressions else {})}
+                **({"expressions": expressions} if expressions else {}), **({"arkit": True} if arkit else {})}
+    if arkit:
+        raise AutobonesError("--arkit needs landmarks and a transfer, which place does not use; add --transfer")
     if expressions:
         raise AutobonesError("--expressions needs muscles, which place does not make; add --transfer")
     if rig is not None:
@@ -148,7 +151,7 @@ def _make_rig(input_path, options, record):
         # a mesh without a landmark file beside it gets automatic landmarks (human faces)
         lm = landmarks_for(input_path)
         record["landmarks"] = lm if lm is not None else "detected"
-        return autobones.transfer(input_path, lm, rig=options.get("rig"))
+        return autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")))
     raise AutobonesError(f"unknown batch mode {mode!r}; use 'place' or 'transfer'")
 
 

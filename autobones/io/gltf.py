@@ -352,3 +352,41 @@ def read_accessor(doc, body, index):
         raise ValueError(f"accessor {index} runs past the end of the binary chunk")
     a = np.frombuffer(body, dtype=dtype, count=count, offset=start)
     return a.reshape(acc["count"], width) if width > 1 else a
+
+
+def add_animation(doc, body, name, times, channels):
+    """The glb ``(doc, body)`` with one more animation (LINEAR keys), as a new ``(doc, body)``.
+
+    Parameters
+    ----------
+    doc, body
+        A glb's JSON dict and BIN chunk (:func:`read_glb`); not modified.
+    name : str
+        The animation's name.
+    times : (f,) float
+        Key times in seconds, strictly increasing.
+    channels : sequence of (node index, path, values)
+        ``path`` "weights" with values (f, t) (one weight per morph target of the node's
+        mesh), or "rotation" with (f, 4) unit quaternions ``x, y, z, w`` (the node's local
+        rotation), or "translation" with (f, 3).
+
+    Write the result with :func:`pack_glb`.
+    """
+    buf = GlbBuffer()
+    buf.blobs = [bytes(body) + b"\0" * (-len(body) % 4)]
+    buf.views, buf.accessors = list(doc.get("bufferViews", [])), list(doc.get("accessors", []))
+    t = np.asarray(times, dtype=np.float32)
+    inp = buf.add(t, FLOAT, "SCALAR")
+    buf.accessors[inp]["min"], buf.accessors[inp]["max"] = [float(t.min())], [float(t.max())]
+    samplers, chans = [], []
+    for node, path, values in channels:
+        values = np.asarray(values, dtype=np.float32)
+        if len(values) != len(t):
+            raise ValueError(f"animation channel {path} of node {node}: {len(values)} keys for {len(t)} times")
+        atype = {"weights": "SCALAR", "rotation": "VEC4", "translation": "VEC3"}[path]
+        out = buf.add(values.reshape(-1) if path == "weights" else values, FLOAT, atype)
+        samplers.append({"input": inp, "output": out, "interpolation": "LINEAR"})
+        chans.append({"sampler": len(samplers) - 1, "target": {"node": int(node), "path": path}})
+    doc = dict(doc, bufferViews=buf.views, accessors=buf.accessors, buffers=[{"byteLength": buf.byte_length()}])
+    doc["animations"] = list(doc.get("animations", [])) + [{"name": name, "samplers": samplers, "channels": chans}]
+    return doc, buf.body()

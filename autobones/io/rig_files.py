@@ -88,9 +88,31 @@ def load_rig(path):
     V = P.astype(np.float64) if V is None else np.asarray(V, dtype=np.float64)
     _check_together(path, len(mask), P, V, F, W, labels, names, saved_names)
     fields = {k[len("field/"):]: v for k, v in arrays.items() if k.startswith("field/")}
+    arkit = _arkit_targets(path, doc, body, meta.get("arkit"), len(P))
     return Rig(vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=mask, frame=frame,
-               options=dict(meta.get("options") or {}), fields=fields,
+               options=dict(meta.get("options") or {}), fields=fields, arkit_targets=arkit,
                **sidecar_attributes({k: v for k, v in meta.items() if k not in _OWN_KEYS}))
+
+
+def _arkit_targets(path, doc, body, record, n):
+    """The ARKit morph targets the sidecar's ``arkit`` record names, read from the glb: dict name ->
+    (n, 3) float64 (the float32 the file stores), or None when the rig has none."""
+    if not record:
+        return None
+    try:
+        mesh = doc["meshes"][0]
+        names = list(mesh.get("extras", {}).get("targetNames", []))
+        targets = mesh["primitives"][0].get("targets", [])
+        out = {}
+        for name in record["names"]:
+            D = read_accessor(doc, body, targets[names.index(name)]["POSITION"]).astype(np.float64)
+            if D.shape != (n, 3):
+                raise ValueError(f"target {name} has {len(D)} rows for {n} vertices")
+            out[name] = D
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise AutobonesError(f"{path}: its ARKit morph targets cannot be read ({type(exc).__name__}: {exc}); "
+                             "save the rig again") from None
+    return out
 
 
 def _read_autobones_glb(path):

@@ -102,7 +102,8 @@ def generic_detected_landmarks(generic, rig=None):
     return detect_generic_landmarks(generic)
 
 
-def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, **fit_options):
+def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
+             **fit_options):
     """Carry the generic rig onto a landmarked head.
 
     Parameters
@@ -124,6 +125,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     details : dict, optional
         Filled with ``correspondence`` ((n_rig, 3): each generic vertex's point on
         the head) and ``reliable`` ((n_rig,) bool), for evaluation.
+    arkit : bool
+        Also make the 52 ARKit shapes on this head (:func:`autobones.arkit.targets.arkit_targets`):
+        ``rig.arkit_targets`` and the ``rig.arkit`` record; ``save`` writes them as morph targets.
 
     Returns
     -------
@@ -174,7 +178,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",
                "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"}
-    return Rig(
+    out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
         source=source, muscles=jsonable(muscles), landmarks={n: lm[n] for n in lm},
@@ -183,6 +187,13 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                                         "landmarks_flagged": detected.flagged}),
         field_labels={k: list(v) for k, v in generic.labels.items()},
         reliable_fraction=float(reliable.mean()))
+    if arkit:
+        from ..arkit.targets import arkit_targets
+
+        out.arkit_targets, out.arkit = arkit_targets(out)
+        out.options["arkit"] = True
+        lap("arkit")
+    return out
 
 
 def _head_landmarks(V, F, source, landmarks, generic, up, front):

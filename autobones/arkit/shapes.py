@@ -1,0 +1,78 @@
+"""The packaged ARKit source shapes: ICT-FaceKit's neutral skin and its 51 displacement fields.
+
+Goes beyond the seeds (issue #15). Built by ``generic_rig/build_arkit_shapes.py`` from
+ICT-FaceKit (MIT, ``generic_rig/arkit/LICENSE``); see that script for the file layout.
+"""
+from __future__ import annotations
+
+import functools
+import json
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import AutobonesError
+from .names import ABSENT, ARKIT_NAMES
+
+
+def shapes_folder():
+    """Folder of the packaged shape set (``generic_rig/arkit``)."""
+    from ..generic_rig import HERE
+
+    return os.path.join(HERE, "arkit")
+
+
+@dataclass(frozen=True)
+class ShapeSet:
+    """A base head and named displacement fields of it.
+
+    vertices : (n, 3) float64
+        The base skin, in its own frame and units (ICT: cm, +X subject's left, +Y up, +Z front).
+    faces : (m, 3) int64
+    landmarks : dict str -> (3,) float64
+        Contract landmarks of the base, same frame.
+    deltas : dict str -> (n, 3) float64
+        Displacement of every base vertex at weight 1, per ARKit name (absent names left out).
+    meta : dict
+        The sidecar JSON (source, licence, units, ...).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    landmarks: dict
+    deltas: dict
+    meta: dict
+
+    @property
+    def names(self):
+        """The names with data, in :data:`ARKIT_NAMES` order."""
+        return [n for n in ARKIT_NAMES if n in self.deltas]
+
+
+@functools.lru_cache(maxsize=2)
+def load_shapes(folder=None):
+    """The :class:`ShapeSet` in ``folder`` (None: the packaged ICT-FaceKit set). Cached: do not modify it."""
+    folder = shapes_folder() if folder is None else os.fspath(folder)
+    npz, js = os.path.join(folder, "ict_arkit.npz"), os.path.join(folder, "ict_arkit.json")
+    try:
+        with open(js, encoding="utf-8") as fh:
+            meta = json.load(fh)
+        with np.load(npz, allow_pickle=False) as z:
+            V = z["vertices"].astype(np.float64)
+            F = z["faces"].astype(np.int64)
+            deltas = {}
+            for name in ARKIT_NAMES:
+                if f"shape/{name}/index" not in z.files:
+                    continue
+                D = np.zeros_like(V)
+                D[z[f"shape/{name}/index"].astype(np.int64)] = z[f"shape/{name}/delta"].astype(np.float64)
+                deltas[name] = D
+    except (OSError, KeyError, ValueError) as exc:
+        raise AutobonesError(f"{folder}: not a readable ARKit shape set ({type(exc).__name__}: {exc}); "
+                             "build it with generic_rig/build_arkit_shapes.py") from None
+    missing = [n for n in ARKIT_NAMES if n not in deltas and n not in ABSENT]
+    if missing:
+        raise AutobonesError(f"{folder}: the shape set lacks {', '.join(missing)}")
+    landmarks = {k: np.asarray(v, dtype=np.float64) for k, v in meta["landmarks"].items()}
+    return ShapeSet(V, F, landmarks, deltas, meta)

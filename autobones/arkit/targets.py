@@ -1,0 +1,222 @@
+"""The 52 ARKit shapes of one transferred rig: displacement fields on its own vertices.
+
+Goes beyond the seeds (issue #15). The packaged source shapes (:mod:`.shapes`, ICT-FaceKit's
+neutral skin) are tied to the head by one more dense correspondence (ICT's 27 contract
+landmarks onto the rig's; :func:`autobones.rig_transfer.correspondence.dense_correspondence`)
+and carried by deformation transfer (:mod:`.deformation_transfer`), one factorisation for all.
+
+Eyes: a head with separate eyeballs (vertices bound wholly to the ``eye_l`` / ``eye_r`` bones
+by :func:`autobones.rig_transfer.eyes.bind_eyeballs`) keeps them out of the skin solve, and the
+eyeLook* shapes turn them rigidly about their eye bone by :data:`EYE_TURN_DEG` (ICT's own
+eyeLook shapes move the lids and eye shells, not its eyeballs, which ICT turns by joints; the
+angles are chosen, not measured). On a one-surface scan the eye surface between the lids is
+one with them: its triangles (:func:`eye_fissures`) are set free in the solve so the lids can
+close over it (held rigid, it kept them apart: the james scan's blink closed 1 % and 24 % of the
+lid gaps; free, 37 % and 67 %; ICT's own blink 77 %), and the eyeLook* shapes move the lids and
+that surface as the skin transfer gives, with no turn.
+``tongueOut`` (ICT has none) is an all-zero target, recorded as absent.
+"""
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+
+from ..errors import AutobonesError
+from ..geometry.normals import triangle_normals
+from ..geometry.topology import mesh_parts
+from .copy_baseline import copy_displacements, similarity
+from .deformation_transfer import DeformationTransfer
+from .names import ARKIT_NAMES, EYE_LOOK
+from .shapes import load_shapes
+
+log = logging.getLogger(__name__)
+
+MIN_LANDMARKS = 6  # the TPS needs a few non-coplanar points; the robot shares 7 with ICT
+# eyeball turn at weight 1, degrees, in the head's canonical frame (+X subject's left, +Y up, +Z front)
+EYE_TURN_DEG = {"Up": 25.0, "Down": 30.0, "In": 30.0, "Out": 30.0}
+# the eye opening of a one-surface head: the landmarks' quadrilateral grown about its centre
+FISSURE_GROWTH = 1.3
+
+
+def eye_turn(name, frame_rotation):
+    """Rotation (3, 3) of the eyeball for eyeLook ``name`` at weight 1, in the input frame.
+
+    ``frame_rotation``: rows are the canonical +X, +Y, +Z in the input frame (:class:`autobones.orient.Frame`).
+    """
+    side = "Left" if name.endswith("Left") else "Right"
+    way = name[len("eyeLook"):-len(side)]
+    a = np.radians(EYE_TURN_DEG[way])
+    c, s = np.cos(a), np.sin(a)
+    if way in ("Up", "Down"):
+        a = -a if way == "Up" else a          # about +X: +Z (gaze) toward +Y is a negative turn
+        c, s = np.cos(a), np.sin(a)
+        Rc = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    else:
+        # toward +X (subject's left) is a positive turn about +Y; the left eye looks out to +X
+        toward_left = (way == "Out") == (side == "Left")
+        s = s if toward_left else -s
+        Rc = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    Rf = np.asarray(frame_rotation, dtype=np.float64)
+    return Rf.T @ Rc @ Rf
+
+
+def eyeball_vertices(rig):
+    """``{"eye_l": mask, "eye_r": mask}`` of vertices bound wholly to an eye bone in separate parts (n,) bool."""
+    names = rig.skeleton.names
+    part = mesh_parts(len(rig.vertices), rig.faces)
+    main = np.argmax(np.bincount(part))
+    out = {}
+    for eye in ("eye_l", "eye_r"):
+        if eye in names:
+            m = (np.asarray(rig.weights)[:, names.index(eye)] >= 0.999) & (part != main)
+            if m.any():
+                out[eye] = m
+    return out
+
+
+def eye_fissures(V, F, landmarks, frame):
+    """Triangles of a one-surface head inside each eye's opening: (m,) bool.
+
+    The opening is the quadrilateral of the four eye landmarks (``exocanthion``,
+    ``palpebrale_superius``, ``endocanthion``, ``palpebrale_inferius``) seen from the front in the
+    head's canonical frame; a triangle is in it when its centroid is, its normal faces forward and
+    it lies within a fissure length of the landmarks in depth. On a scan the eye surface there is
+    one with the lids: held rigid it would keep the lids apart in a blink.
+    """
+    C = frame.to_canonical(np.asarray(V, dtype=np.float64)[F].mean(axis=1))
+    n = triangle_normals(V, F) @ np.asarray(frame.rotation, dtype=np.float64).T
+    out = np.zeros(len(F), dtype=bool)
+    for side in ("l", "r"):
+        names = [f"exocanthion_{side}", f"palpebrale_superius_{side}", f"endocanthion_{side}",
+                 f"palpebrale_inferius_{side}"]
+        if not all(k in landmarks for k in names):
+            continue
+        Q = frame.to_canonical(np.array([landmarks[k] for k in names], dtype=np.float64))
+        fissure = np.linalg.norm(Q[0] - Q[2])
+        mid = Q[:, :2].mean(axis=0)
+        inside = _in_polygon(C[:, :2], mid + FISSURE_GROWTH * (Q[:, :2] - mid))
+        out |= inside & (n[:, 2] > 0.3) & (np.abs(C[:, 2] - Q[:, 2].mean()) < fissure)
+    return out
+
+
+def _in_polygon(X, poly):
+    """Points ``X`` (k, 2) inside the closed polygon ``poly`` (p, 2): even-odd ray casting, (k,) bool."""
+    inside = np.zeros(len(X), dtype=bool)
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        crosses = (a[1] > X[:, 1]) != (b[1] > X[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_at = a[0] + (X[:, 1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+        inside ^= crosses & (X[:, 0] < x_at)
+    return inside
+
+
+def flipped_triangles(V, F, D):
+    """Triangles whose normal turns over (dot < 0) between ``V`` and ``V + D``: a count."""
+    return int((np.einsum("ij,ij->i", triangle_normals(V, F), triangle_normals(V + D, F)) < 0).sum())
+
+
+def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_options):
+    """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
+
+    Parameters
+    ----------
+    rig : Rig
+        A rig with ``landmarks`` (``autobones.transfer``), input frame and units.
+    shapes : ShapeSet or None
+        The source set (None: the packaged ICT-FaceKit set).
+    method : "deformation" or "copy"
+        Deformation transfer, or the copy baseline (:mod:`.copy_baseline`; for comparison).
+    timings : dict, optional
+        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``eyes``.
+    **fit_options
+        Passed to :func:`dense_correspondence`.
+
+    Returns
+    -------
+    targets : dict str -> (n, 3) float64
+        All 52 :data:`ARKIT_NAMES` (``tongueOut`` zero), input frame and units, rounded to
+        float32 (what the glb stores, so a reloaded rig poses identically).
+    record : dict
+        For the sidecar: ``names``, ``source``, ``method``, ``absent``, ``eyes``,
+        ``flipped_triangles`` (per name, at weight 1), ``max_displacement`` (mesh units).
+    """
+    from ..rig_transfer.correspondence import dense_correspondence
+
+    S = load_shapes() if shapes is None else shapes
+    lm = rig.landmarks or {}
+    shared = [n for n in S.landmarks if n in lm]
+    if len(shared) < MIN_LANDMARKS:
+        raise AutobonesError(f"ARKit shapes: the rig has {len(shared)} landmarks shared with the shape set "
+                             f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} are needed "
+                             "(make the rig with autobones transfer)")
+    V, F = np.asarray(rig.vertices, dtype=np.float64), np.asarray(rig.faces, dtype=np.int64)
+    t = time.perf_counter()
+    src = {n: S.landmarks[n] for n in shared}
+    dst = {n: np.asarray(lm[n], dtype=np.float64) for n in shared}
+    P = dense_correspondence(S.vertices, S.faces, V, F, src, dst, **fit_options)[0]
+    tim = {"correspond": time.perf_counter() - t}
+    names = S.names
+    D = np.stack([S.deltas[n] for n in names])
+    eyes = eyeball_vertices(rig)
+    keep = np.zeros(len(V), dtype=bool)
+    for m in eyes.values():
+        keep |= m
+    if method == "deformation":
+        moving = np.linalg.norm(D, axis=2).max(axis=0) > 0
+        # a scan's eye surface between the lids takes no gradient (no separate eyeballs there)
+        free = None if eyes else eye_fissures(V, F, lm, rig.frame)
+        dt = DeformationTransfer().fit(S.vertices, S.faces, P, V, F, moving=moving, free=free)
+        X = dt.transform(D, keep=keep)
+        tim.update(dt.timings_)
+    elif method == "copy":
+        s, R = similarity(np.array([src[n] for n in shared]), np.array([dst[n] for n in shared]))
+        X = copy_displacements(S.faces, D, P, V, s, R)
+        X[:, keep] = 0.0
+    else:
+        raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
+    t = time.perf_counter()
+    by_name = dict(zip(names, X))
+    if eyes:
+        names_b = rig.skeleton.names
+        for name in EYE_LOOK:
+            eye = "eye_l" if name.endswith("Left") else "eye_r"
+            if eye in eyes:
+                m = eyes[eye]
+                c = rig.skeleton.heads[names_b.index(eye)]
+                R = eye_turn(name, rig.frame.rotation)
+                by_name[name] = by_name[name].copy()
+                by_name[name][m] = (V[m] - c) @ R.T + c - V[m]
+    targets = {}
+    for name in ARKIT_NAMES:
+        d = by_name.get(name)
+        d = np.zeros_like(V) if d is None else d
+        targets[name] = d.astype(np.float32).astype(np.float64)
+    tim["eyes"] = time.perf_counter() - t
+    if timings is not None:
+        timings.update(tim)
+    record = {
+        "format": "autobones-arkit/1",
+        "names": list(ARKIT_NAMES),
+        "source": S.meta.get("source"),
+        "license": S.meta.get("license"),
+        "method": {"deformation": "deformation transfer (Sumner & Popovic 2004)",
+                   "copy": "displacements copied through the correspondence"}[method],
+        "left_right": "Left is the subject's own left (ARKit's convention)",
+        "landmarks_used": shared,
+        "absent": [n for n in ARKIT_NAMES if n not in S.deltas],
+        "eyes": ("eyeLook* turn the separate eyeballs about " + ", ".join(sorted(eyes)) + " by "
+                 + ", ".join(f"{k.lower()} {v:g} deg" for k, v in EYE_TURN_DEG.items())) if eyes else
+                "no separate eyeballs: eyeLook* move the lids and eye surface as the skin transfer gives",
+        "flipped_triangles": {n: flipped_triangles(V, F, targets[n]) for n in ARKIT_NAMES},
+        # the same count for the source's own shapes on its own skin: ICT folds some (mouthClose)
+        "source_flipped_triangles": S.meta.get("source_flipped_triangles", {}),
+        "max_displacement": {n: float(np.linalg.norm(targets[n], axis=1).max(initial=0.0)) for n in ARKIT_NAMES},
+    }
+    src = record["source_flipped_triangles"]
+    bad = {n: c for n, c in record["flipped_triangles"].items() if c > src.get(n, 0)}
+    if bad:  # ICT's own shapes fold some (mouthClose): only more than the source's is news
+        log.warning("ARKit shapes: more triangles turned over at weight 1 than in the source shapes: %s",
+                    ", ".join(f"{n} {c} (source {src.get(n, 0)})" for n, c in bad.items()))
+    return targets, record

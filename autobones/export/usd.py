@@ -1,0 +1,432 @@
+"""Write a saved rig as a UsdSkel stage (.usda, .usdc, .usd, .usdz) with usd-core.
+
+Beyond the seeds (issue #17): film pipelines (Omniverse, Houdini, Maya, Apple) read USD. The
+stage, its default prim ``/Rig`` a ``SkelRoot``:
+
+- ``/Rig/Skeleton`` (``Skeleton``): one joint per glTF bone (marker nodes are not joints), joint
+  paths from the bone names (``neck/head/jaw``; names that are not USD identifiers are made
+  valid, the original names kept in ``jointNames``); ``bindTransforms`` = ``restTransforms``
+  composed = the glb's rest pose, each joint's +Y from its head to its tail as in the glb.
+- ``/Rig/Mesh`` (``Mesh``, triangles, ``subdivisionScheme = "none"``): the rig's vertices (float32
+  of the exact input vertices, the input's own order), ``SkelBindingAPI`` with every influence
+  the rig has (``primvars:skel:jointIndices`` / ``jointWeights``, elementSize = the largest number
+  of non-zero weights on one vertex, not the glb's four), ``geomBindTransform`` identity (the mesh
+  and the skeleton share the rig's frame), per-vertex ``primvars:autobones:*`` for the rig's depth
+  labels and transferred fields.
+- ``/Rig/Mesh/<name>`` (``BlendShape``): one per glb morph target (sparse ``offsets`` +
+  ``pointIndices``); the names of ``skel:blendShapes`` are the prim names, each prim's
+  ``customData["autobones:name"]`` keeps the original name.
+- ``/Rig/Animations/<name>`` (``SkelAnimation``): one per glb animation, resampled at its key
+  times; the first is the skeleton's ``skel:animationSource``.
+- ``/Rig`` ``customData["autobones"]``: the frame, landmarks, muscles (origin, insertion, type,
+  side, width), the muscle markers' joints, the source file, the version.
+
+Frame and units: points stay in the rig's input frame and units (vertex for vertex the glb's).
+``upAxis`` is ``Y`` or ``Z`` when the rig's detected up is ``+y`` or ``+z``; any other up (``-y``,
+``±x``, ``-z``) gets ``upAxis = Y`` and a rotation on ``/Rig`` taking the detected up and front
+axes to +Y and +Z. ``metersPerUnit``: the power of ten that makes the head size (the rig's frame
+scale) nearest 0.3 m, a human head: metres, centimetres and millimetres scans all come out
+right; pass ``meters_per_unit`` when the head is not human-sized or the unit is not metric.
+"""
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+
+import numpy as np
+
+from ..errors import AutobonesError
+from ..io.atomic import check_destination, refuse_overwriting_inputs, replace_all, temp_beside
+from .source import read_rig_source
+
+INSTALL = "USD export needs usd-core: pip install 'autobones[usd]' (or pip install usd-core)"
+HUMAN_HEAD_M = 0.3   # a human head's size in metres (the frame's scale of the built-in head: 0.31)
+
+
+def _pxr():
+    try:
+        from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt
+    except ImportError:
+        raise AutobonesError(INSTALL) from None
+    return Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt
+
+
+def guess_meters_per_unit(head_size):
+    """Metres per mesh unit: the power of ten taking ``head_size`` (mesh units) nearest
+    :data:`HUMAN_HEAD_M` (0.31 -> 1, 31 -> 0.01, 310 -> 0.001)."""
+    if not (head_size > 0 and math.isfinite(head_size)):
+        return 1.0
+    return 10.0 ** round(math.log10(HUMAN_HEAD_M / head_size))
+
+
+def unique_identifiers(names, taken=()):
+    """Valid USD prim names for ``names`` (list of str), distinct from each other and ``taken``."""
+    _, _, Tf, *_ = _pxr()
+    out, used = [], set(taken)
+    for name in names:
+        name = str(name)
+        # a leading digit becomes "_9", not "_" (Tf would replace it): the digit is kept
+        base = Tf.MakeValidIdentifier("_" + name if name[:1].isdigit() else name) if name else "_"
+        ident, i = base, 1
+        while ident in used:
+            ident, i = f"{base}_{i}", i + 1
+        used.add(ident)
+        out.append(ident)
+    return out
+
+
+def joint_paths(names, parents):
+    """UsdSkel joint paths (``neck/head/jaw``) from bone ``names`` and ``parents`` (-1: root):
+    each element a valid identifier, siblings distinct."""
+    paths = [None] * len(names)
+    siblings = {}
+    pending = list(range(len(names)))
+    while pending:
+        rest = []
+        for k in pending:
+            p = int(parents[k])
+            if p >= 0 and paths[p] is None:
+                rest.append(k)
+                continue
+            taken = siblings.setdefault(p, set())
+            ident = unique_identifiers([names[k]], taken)[0]
+            taken.add(ident)
+            paths[k] = ident if p < 0 else f"{paths[p]}/{ident}"
+        if len(rest) == len(pending):
+            raise AutobonesError("the joints' parents form a cycle")
+        pending = rest
+    return paths
+
+
+def all_influences(W):
+    """Every non-zero weight of each vertex, largest first, as UsdSkel wants them.
+
+    Parameters
+    ----------
+    W : (n, b) float
+        Weights, rows summing to 1.
+
+    Returns
+    -------
+    indices : (n, k) int32
+        Joint indices; k = the largest count of non-zero weights on one vertex (at least 1);
+        0 in unused slots.
+    weights : (n, k) float32
+        Their weights, rows renormalised to sum 1; 0 in unused slots.
+    """
+    W = np.asarray(W, dtype=np.float64)
+    n, b = W.shape
+    k = max(int((W > 0).sum(axis=1).max(initial=0)), 1)
+    idx = np.argsort(-W, axis=1, kind="stable")[:, :k]
+    w = np.take_along_axis(W, idx, axis=1)
+    w = np.where(w > 0, w, 0.0)
+    s = w.sum(axis=1, keepdims=True)
+    w = np.where(s > 0, w / np.where(s > 0, s, 1.0), 0.0)
+    idx = np.where(w > 0, idx, 0)
+    return idx.astype(np.int32), w.astype(np.float32)
+
+
+def _frame_orientation(frame):
+    """(up axis token, 3x3 rotation or None): see the module doc."""
+    up = frame.up
+    if up == "+y":
+        return "Y", None
+    if up == "+z":
+        return "Z", None
+    axes = {"x": 0, "y": 1, "z": 2}
+
+    def unit(a):
+        v = np.zeros(3)
+        v[axes[a[1]]] = 1.0 if a[0] == "+" else -1.0
+        return v
+
+    u, f = unit(up), unit(frame.front)
+    if abs(u @ f) > 0.5:  # degenerate: keep the data as it is
+        return "Y", None
+    x = np.cross(u, f)
+    R = np.stack([x, u, f])  # rows: new x, y, z in input coordinates -> R @ p is the upright point
+    return "Y", R
+
+
+def _to_vt(value):
+    """JSON value -> a value USD's customData holds (dicts, strings, numbers, arrays); None dropped."""
+    if isinstance(value, dict):
+        return {str(k): _to_vt(v) for k, v in value.items() if v is not None}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        if len(value) == 3 and all(isinstance(r, (list, tuple)) and len(r) == 3 for r in value):
+            from pxr import Gf
+
+            return Gf.Matrix3d([[float(x) for x in r] for r in value])  # e.g. the frame's rotation
+        items = [v for v in value if v is not None]
+        if items and all(isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)
+                         for v in items):
+            from pxr import Vt
+
+            return Vt.DoubleArray([float(v) for v in items])
+        if all(isinstance(v, str) for v in items):
+            from pxr import Vt
+
+            return Vt.StringArray(items)
+        return {str(i): _to_vt(v) for i, v in enumerate(items)}
+    if isinstance(value, (np.floating, float)):
+        return float(value)
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    return str(value)
+
+
+def _rig_record(src, meters_per_unit, guessed):
+    rig = src.rig
+    from ..version import __version__
+
+    rec = {"format": "autobones-usd/1", "autobones_version": __version__, "source": os.path.basename(src.path),
+           "frame": rig.frame.to_dict(), "units": {"meters_per_unit": meters_per_unit,
+                                                   "guessed_from_head_size": guessed}}
+    if rig.landmarks:
+        rec["landmarks"] = {n: np.asarray(p, dtype=float).tolist() for n, p in rig.landmarks.items()}
+    if rig.muscles:
+        rec["muscles"] = {str(m.get("name", i)): m for i, m in enumerate(rig.muscles)}
+    if src.markers:
+        rec["muscle_markers"] = dict(src.markers)
+    return _to_vt(rec)
+
+
+def build_stage(src, meters_per_unit=None):
+    """The UsdSkel stage (in memory) of a :class:`autobones.export.source.RigSource`; see the module doc."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = _pxr()
+    rig = src.rig
+    guessed = meters_per_unit is None
+    mpu = guess_meters_per_unit(float(rig.frame.size)) if guessed else float(meters_per_unit)
+    if not (mpu > 0 and math.isfinite(mpu)):
+        raise AutobonesError(f"meters per unit must be a positive number, not {meters_per_unit!r}")
+    stage = Usd.Stage.CreateInMemory()
+    up, R = _frame_orientation(rig.frame)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y if up == "Y" else UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, mpu)
+    root = UsdSkel.Root.Define(stage, "/Rig")
+    stage.SetDefaultPrim(root.GetPrim())
+    if R is not None:
+        M = np.eye(4)
+        M[:3, :3] = R.T  # row-vector convention: p_upright = p @ R.T
+        root.AddTransformOp().Set(Gf.Matrix4d(M.tolist()))
+    root.GetPrim().SetCustomDataByKey("autobones", _rig_record(src, mpu, guessed))
+
+    # skeleton: USD matrices act on row vectors, the transpose of the column-vector ones
+    skel = UsdSkel.Skeleton.Define(stage, "/Rig/Skeleton")
+    paths = joint_paths(src.joint_names, src.parents)
+    skel.CreateJointsAttr(Vt.TokenArray(paths))
+    skel.CreateJointNamesAttr(Vt.TokenArray(src.joint_names))
+    skel.CreateBindTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.world]))
+    skel.CreateRestTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.local]))
+
+    mesh = UsdGeom.Mesh.Define(stage, "/Rig/Mesh")
+    V = np.asarray(rig.vertices, dtype=np.float32)
+    F = np.asarray(rig.faces, dtype=np.int32)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(V)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(F), 3, dtype=np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(F.ravel())))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # triangles as they are, no Catmull-Clark
+    mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)  # glTF's counter-clockwise front faces
+    lo, hi = (V.min(axis=0), V.max(axis=0)) if len(V) else (np.zeros(3), np.zeros(3))
+    mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
+
+    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
+    binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
+    idx, w = all_influences(rig.weights)
+    k = idx.shape[1]
+    binding.CreateJointIndicesPrimvar(False, k).Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(idx.ravel())))
+    binding.CreateJointWeightsPrimvar(False, k).Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(w.ravel())))
+    binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
+    _add_vertex_primvars(mesh, rig, Sdf, UsdGeom, Vt)
+
+    shape_names = unique_identifiers([name for name, _ in src.morph_targets])
+    if src.morph_targets:
+        targets = []
+        for ident, (name, delta) in zip(shape_names, src.morph_targets):
+            bs = UsdSkel.BlendShape.Define(stage, mesh.GetPath().AppendChild(ident))
+            moved = np.flatnonzero(np.any(delta != 0, axis=1)).astype(np.int32)
+            bs.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(delta[moved], dtype=np.float32)))
+            bs.CreatePointIndicesAttr(Vt.IntArray.FromNumpy(moved))
+            bs.GetPrim().SetCustomDataByKey("autobones:name", name)
+            targets.append(bs.GetPath())
+        binding.CreateBlendShapesAttr(Vt.TokenArray(shape_names))
+        binding.CreateBlendShapeTargetsRel().SetTargets(targets)
+
+    if src.animations:
+        UsdGeom.Scope.Define(stage, "/Rig/Animations")
+        anims = unique_identifiers([a.name for a in src.animations])
+        fps = _frame_rate(np.concatenate([a.times for a in src.animations]))
+        stage.SetTimeCodesPerSecond(fps)
+        stage.SetFramesPerSecond(fps)
+        first = None
+        for ident, a in zip(anims, src.animations):
+            prim = write_animation(stage, f"/Rig/Animations/{ident}", paths, a.times * fps, a.translations,
+                                   a.rotations, a.scales,
+                                   None if a.morph_weights is None else shape_names, a.morph_weights)
+            prim.GetPrim().SetCustomDataByKey("autobones:name", a.name)
+            first = first or prim
+        all_t = np.concatenate([a.times for a in src.animations]) * fps
+        stage.SetStartTimeCode(float(all_t.min()))
+        stage.SetEndTimeCode(float(all_t.max()))
+        UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([first.GetPath()])
+    return stage
+
+
+def write_animation(stage, path, joints, time_codes, translations, rotations, scales, shapes=None, shape_weights=None):
+    """Define a ``SkelAnimation`` at ``path`` with every joint's local transform at each time code.
+
+    Parameters
+    ----------
+    joints : list of str
+        Joint paths (the skeleton's order).
+    time_codes : (t,) float
+    translations : (t, b, 3) float, rotations : (t, b, 4) float (x, y, z, w), scales : (t, b, 3) float
+        Local (parent-relative) transforms, the rig's frame and units.
+    shapes : list of str or None
+        Blend shape names driven, with ``shape_weights`` (t, k) float.
+    """
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = _pxr()
+    anim = UsdSkel.Animation.Define(stage, path)
+    anim.CreateJointsAttr(Vt.TokenArray(joints))
+    ta, ra, sa = anim.CreateTranslationsAttr(), anim.CreateRotationsAttr(), anim.CreateScalesAttr()
+    for i, t in enumerate(np.asarray(time_codes, dtype=np.float64)):
+        tc = Usd.TimeCode(float(t))
+        ta.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(translations[i], dtype=np.float32)), tc)
+        ra.Set(Vt.QuatfArray([Gf.Quatf(float(q[3]), float(q[0]), float(q[1]), float(q[2])) for q in rotations[i]]), tc)
+        sa.Set(Vt.Vec3hArray([Gf.Vec3h(*map(float, s)) for s in scales[i]]), tc)
+    if shapes is not None and shape_weights is not None:
+        anim.CreateBlendShapesAttr(Vt.TokenArray(shapes))
+        wa = anim.CreateBlendShapeWeightsAttr()
+        for i, t in enumerate(np.asarray(time_codes, dtype=np.float64)):
+            wa.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(shape_weights[i], dtype=np.float32)),
+                   Usd.TimeCode(float(t)))
+    return anim
+
+
+def _frame_rate(times):
+    """Time codes per second: the first common frame rate whose frames hold every key time, else 24."""
+    for fps in (24.0, 25.0, 30.0, 48.0, 50.0, 60.0, 120.0):
+        if np.all(np.abs(times * fps - np.round(times * fps)) < 1e-3):
+            return fps
+    return 24.0
+
+
+def _add_vertex_primvars(mesh, rig, Sdf, UsdGeom, Vt):
+    """Per-vertex ``primvars:autobones:label`` (0 face, 1 middle, 2 back) and each transferred field."""
+    api = UsdGeom.PrimvarsAPI(mesh)
+    n = len(rig.vertices)
+    items = [("label", np.asarray(rig.labels))] + sorted((str(k), np.asarray(v)) for k, v in rig.fields.items())
+    names = unique_identifiers([k for k, _ in items])
+    for ident, (_, a) in zip(names, items):
+        if a.shape[:1] != (n,) or a.ndim > 2:
+            continue
+        width = 1 if a.ndim == 1 else a.shape[1]
+        if np.issubdtype(a.dtype, np.integer) or a.dtype == bool:
+            pv = api.CreatePrimvar(f"autobones:{ident}", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.vertex, width)
+            pv.Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(a.astype(np.int32).ravel())))
+        else:
+            pv = api.CreatePrimvar(f"autobones:{ident}", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex, width)
+            pv.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(a.astype(np.float32).ravel())))
+
+
+def validate_stage(stage_or_path):
+    """USD's own checks on a stage or a file: every validator registered with ``pxr.UsdValidation``,
+    the framework that replaced ``UsdUtils.ComplianceChecker`` (usd-core 26.11 has no compliance
+    checker); a release without the framework's ``ValidationContext`` runs the compliance checker.
+
+    Returns
+    -------
+    list of (str, str, str)
+        (``"Error"``/``"Warn"``/``"Info"``, error name, message) per finding; empty when clean.
+    """
+    _, _, _, Usd, *_ = _pxr()
+    try:
+        from pxr import UsdValidation
+
+        UsdValidation.ValidationContext  # noqa: B018 (usd-core >= 25.02)
+    except (ImportError, AttributeError):  # older usd-core: the compliance checker usdchecker ran then
+        from pxr import UsdUtils
+
+        path = stage_or_path if isinstance(stage_or_path, (str, os.PathLike)) else \
+            stage_or_path.GetRootLayer().realPath
+        checker = UsdUtils.ComplianceChecker(skipARKitRootLayerCheck=True)
+        checker.CheckCompliance(os.fspath(path))
+        return ([("Error", "compliance", m) for m in checker.GetErrors() + checker.GetFailedChecks()]
+                + [("Warn", "compliance", m) for m in checker.GetWarnings()])
+    stage = Usd.Stage.Open(os.fspath(stage_or_path)) if isinstance(stage_or_path, (str, os.PathLike)) \
+        else stage_or_path
+    registry = UsdValidation.ValidationRegistry()
+    ctx = UsdValidation.ValidationContext(registry.GetOrLoadAllValidators())
+    out = []
+    for e in ctx.Validate(stage):
+        if e.HasNoError():
+            continue
+        out.append((e.GetType().displayName if hasattr(e.GetType(), "displayName") else str(e.GetType()),
+                    str(e.GetName()), str(e.GetMessage())))
+    return out
+
+
+def write_usd(rig_path, out_path, meters_per_unit=None):
+    """Write the rig saved as ``rig_path`` to ``out_path`` as a UsdSkel stage (see the module doc).
+
+    Parameters
+    ----------
+    rig_path : str or os.PathLike
+        A glb written by autobones (``place``, ``transfer``, ``batch``), its ``.rig.json`` and
+        ``.weights.npz`` beside it.
+    out_path : str or os.PathLike
+        ``.usda`` (text), ``.usdc`` or ``.usd`` (binary crate), ``.usdz`` (a package holding one
+        ``.usdc``). Written under a temporary name and renamed when complete.
+    meters_per_unit : float or None
+        The stage's ``metersPerUnit``; None guesses it from the head size (:func:`guess_meters_per_unit`).
+
+    Returns
+    -------
+    dict
+        ``path``; ``joints``, ``vertices``, ``influences`` (elementSize), ``blend_shapes``,
+        ``animations`` (counts); ``meters_per_unit``, ``up_axis``; ``validation``: the
+        findings of :func:`validate_stage` on the written file.
+
+    Raises AutobonesError for a bad input (see :func:`read_rig_source`), an output that is the
+    input, a suffix that is not USD's, or usd-core missing.
+    """
+    rig_path, out_path = os.fspath(rig_path), os.fspath(out_path)
+    ext = os.path.splitext(out_path)[1].lower()
+    if ext not in (".usd", ".usda", ".usdc", ".usdz"):
+        raise AutobonesError(f"{out_path}: a USD file ends in .usd, .usda, .usdc or .usdz, not {ext or 'nothing'!r}")
+    refuse_overwriting_inputs([out_path], [rig_path])
+    check_destination(out_path, "the USD file")
+    _, _, _, Usd, UsdGeom, UsdSkel, _ = _pxr()
+    src = read_rig_source(rig_path)
+    stage = build_stage(src, meters_per_unit)
+    fd, tmp = temp_beside(out_path, suffix=ext)
+    os.close(fd)
+    try:
+        if ext == ".usdz":
+            from pxr import UsdUtils
+
+            with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
+                inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
+                if not stage.GetRootLayer().Export(inner):
+                    raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+                os.remove(tmp)  # the packager refuses to replace a file
+                if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
+                    raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
+        elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
+            raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+        findings = validate_stage(tmp)
+        replace_all([(tmp, out_path)], "the USD file")
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    rig = src.rig
+    idx, _ = all_influences(rig.weights)
+    return {"path": out_path, "joints": len(src.joint_names), "vertices": len(rig.vertices),
+            "influences": int(idx.shape[1]), "blend_shapes": len(src.morph_targets),
+            "animations": len(src.animations), "meters_per_unit": UsdGeom.GetStageMetersPerUnit(stage),
+            "up_axis": str(UsdGeom.GetStageUpAxis(stage)), "validation": findings}

@@ -1,0 +1,167 @@
+"""ARKit shapes on heads the shape set was not built on: deformation transfer against copying (issue #15).
+
+Run by hand, not by the tests::
+
+    python benchmarks/arkit.py                       # 4 identities (~3 min on 2 cores)
+    python benchmarks/arkit.py --identities 3 7      # these ICT identities
+    python benchmarks/arkit.py --no-remesh           # keep ICT's triangulation (an easier case)
+
+Heads: ICT-FaceKit identities (``../shared/data/ict/ict_facekit_shapes.npz``; the shape set's
+base is ICT's neutral head, which no identity is), each **remeshed** (one Loop subdivision,
+then ``fast_simplification`` back to ICT's triangle count: no vertex or triangle is ICT's)
+and at its own scale (centimetres). Its 27 landmarks are ICT's neutral landmarks carried by
+their barycentric coordinates onto the identity, then to the closest remeshed point.
+
+Truth: ICT is linear: identity k with expression E is ``neutral + identity_k + E``; at a
+remeshed vertex the truth displacement is ``E`` interpolated at its closest point on the
+identity, in the part the remeshed part came from (``browInnerUp`` and ``cheekPuff`` are ICT's two
+halves summed). "all" includes the eyeballs, teeth and mouth socket, which the packaged skin-only
+set does not carry: they move rigidly with the skin nearest them (``DeformationTransfer.transform``).
+
+Score per shape: explained fraction ``1 - ||error|| / ||true displacement||`` over the skin
+(the largest connected part) and over all vertices; for deformation transfer
+(:class:`autobones.arkit.deformation_transfer.DeformationTransfer`) and the copy baseline
+(:func:`autobones.arkit.copy_baseline.copy_displacements`), both through one dense
+correspondence of the packaged ICT skin onto the head. Mean and worst over the 51 shapes ICT
+has (``tongueOut`` is absent). Time: the correspondence, then the deformation transfer of
+all shapes (mapping, one factorisation, the solve); 2 cores shared with other work.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from autobones.arkit.copy_baseline import copy_displacements, similarity  # noqa: E402
+from autobones.arkit.deformation_transfer import DeformationTransfer  # noqa: E402
+from autobones.arkit.names import ict_names  # noqa: E402
+from autobones.arkit.shapes import load_shapes  # noqa: E402
+from autobones.geometry.closest import closest_points  # noqa: E402
+from autobones.geometry.topology import mesh_parts  # noqa: E402
+from autobones.io.obj import read_obj  # noqa: E402
+from autobones.rig_transfer.correspondence import dense_correspondence  # noqa: E402
+
+ICT = os.path.join(ROOT, "..", "shared", "data", "ict")
+
+
+def remesh(V, F):
+    """One Loop subdivision, then quadric decimation back to ``len(F)`` triangles."""
+    import fast_simplification
+    import trimesh
+
+    Vs, Fs = trimesh.remesh.subdivide_loop(V, F, iterations=1)
+    Vr, Fr = fast_simplification.simplify(Vs, Fs, target_reduction=1.0 - len(F) / len(Fs))
+    keep = np.unique(Fr)  # drop unreferenced vertices
+    remap = -np.ones(len(Vr), dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    return np.asarray(Vr, dtype=np.float64)[keep], remap[Fr]
+
+
+def carry(P, V, F, part, Pq_part=None):
+    """Closest points of ``P`` on (V, F) (same part when given): (faces, barycentric)."""
+    face_labels = part[F[:, 0]]
+    _, face, bary, _ = closest_points(P, V, F, labels=Pq_part, face_labels=face_labels if Pq_part is not None else None)
+    return face, bary
+
+
+def score(X, T, mask):
+    return 1.0 - np.linalg.norm(X[mask] - T[mask]) / max(np.linalg.norm(T[mask]), 1e-300)
+
+
+def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True):
+    Vi = neutral + z[f"identity/identity{k:03d}"].astype(np.float64)
+    # landmarks: ICT's neutral landmarks at their barycentric place on the identity
+    lf, lb = carry(np.array(list(lm_neutral.values())), neutral, F, part)
+    lm = {n: (Vi[F[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm_neutral, lf, lb)}
+    if do_remesh:
+        Vt, Ft = remesh(Vi, F)
+    else:
+        Vt, Ft = Vi, F
+    tpart = mesh_parts(len(Vt), Ft)
+    tskin = tpart == np.argmax(np.bincount(tpart))
+    # each target vertex's place on the identity, in the part its remeshed part came from (the part
+    # most of its vertices are closest to): the truth is interpolated there
+    f0, _ = carry(Vt, Vi, F, part)
+    votes = np.zeros((tpart.max() + 1, part.max() + 1))
+    np.add.at(votes, (tpart, part[F[f0, 0]]), 1)
+    labels = np.argmax(votes, axis=1)[tpart]
+    tf, tb = carry(Vt, Vi, F, part, labels)
+    names = S.names
+    T = np.stack([np.einsum("vcd,vc->vd", sum(z[f"expression/{i}"].astype(np.float64) for i in ict_names(n))[F[tf]],
+                            tb) for n in names])
+    # landmarks onto the remeshed surface
+    _, lfv, lbv, _ = closest_points(np.array(list(lm.values())), Vt, Ft)
+    lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
+    D = np.stack([S.deltas[n] for n in names])
+    t0 = time.perf_counter()
+    P = dense_correspondence(S.vertices, S.faces, Vt, Ft, S.landmarks, lm_t)[0]
+    t_corr = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    moving = np.linalg.norm(D, axis=2).max(axis=0) > 0
+    dt = DeformationTransfer().fit(S.vertices, S.faces, P, Vt, Ft, moving=moving)
+    X = dt.transform(D)
+    t_dt = time.perf_counter() - t0
+    shared = [n for n in S.landmarks if n in lm_t]
+    s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm_t[n] for n in shared]))
+    C = copy_displacements(S.faces, D, P, Vt, s, R)
+    every = np.ones(len(Vt), dtype=bool)
+    rows = {n: (score(X[j], T[j], tskin), score(C[j], T[j], tskin), score(X[j], T[j], every), score(C[j], T[j], every))
+            for j, n in enumerate(names)}
+    return {"identity": k, "vertices": len(Vt), "triangles": len(Ft), "correspond_s": t_corr, "transfer_s": t_dt,
+            "dt_timings": dt.timings_, "rows": rows}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--identities", type=int, nargs="+", default=[3, 7, 11, 15])
+    ap.add_argument("--no-remesh", action="store_true")
+    ap.add_argument("--json", help="also write the numbers here")
+    args = ap.parse_args(argv)
+    S = load_shapes()
+    neutral, F = read_obj(os.path.join(ICT, "generic_neutral_mesh.obj"))
+    part = mesh_parts(len(neutral), F)
+    with open(os.path.join(ICT, "generic_neutral_mesh.landmarks.json")) as fh:
+        lm_neutral = {n: np.asarray(v, dtype=np.float64) for n, v in json.load(fh)["landmarks"].items()}
+    z = dict(np.load(os.path.join(ICT, "ict_facekit_shapes.npz")))
+    results = []
+    for k in args.identities:
+        r = run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=not args.no_remesh)
+        results.append(r)
+        A = np.array(list(r["rows"].values()))
+        print(f"identity{k:03d}: {r['vertices']} vertices, {r['triangles']} triangles; correspondence "
+              f"{r['correspond_s']:.1f} s, deformation transfer of {len(r['rows'])} shapes {r['transfer_s']:.1f} s "
+              f"({', '.join(f'{a} {b:.2f}' for a, b in r['dt_timings'].items())}); skin: DT mean {A[:, 0].mean():.1%} "
+              f"worst {A[:, 0].min():.1%}, copy mean {A[:, 1].mean():.1%} worst {A[:, 1].min():.1%}", flush=True)
+    names = list(results[0]["rows"])
+    M = np.array([[r["rows"][n] for n in names] for r in results])  # (ids, shapes, 4)
+    per = M.mean(axis=0)
+    print()
+    print("| shape | DT skin | copy skin | DT all | copy all |")
+    print("|---|---|---|---|---|")
+    for j in np.argsort(per[:, 0]):
+        print(f"| {names[j]} | {per[j, 0]:.1%} | {per[j, 1]:.1%} | {per[j, 2]:.1%} | {per[j, 3]:.1%} |")
+    print()
+    print(f"| over {len(results)} remeshed identities x {len(names)} shapes "
+          "| DT skin | copy skin | DT all | copy all |")
+    print("|---|---|---|---|---|")
+    print("| mean | " + " | ".join(f"{M[:, :, c].mean():.1%}" for c in range(4)) + " |")
+    print("| worst shape (mean over identities) | " + " | ".join(f"{per[:, c].min():.1%}" for c in range(4)) + " |")
+    print("| worst shape on any identity | " + " | ".join(f"{M[:, :, c].min():.1%}" for c in range(4)) + " |")
+    ts = [r["transfer_s"] for r in results]
+    print(f"\ntime, all {len(names)} shapes by deformation transfer: median {np.median(ts):.1f} s "
+          f"(min {min(ts):.1f}, max {max(ts):.1f}) on ~{results[0]['vertices']}-vertex heads; "
+          f"correspondence {np.median([r['correspond_s'] for r in results]):.1f} s")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1, default=float)
+
+
+if __name__ == "__main__":
+    main()
