@@ -158,9 +158,7 @@ def inpaint(V, F, values, known):
         Luu = (Luu + sp.diags(np.where(reach, 0.0, 1.0))).tocsc()
         rhs = -(Luk @ Xw[sub[kw[sub]]])
         rhs[~reach] = 0.0
-        # minimum degree on A + A^T fills the factor less than COLAMD: its solve with every field as a
-        # right-hand side (50-odd columns) is most of the cost on a bust scan (134k vertices: 56k filled)
-        Xw[unknown] = factor_spd(Luu, ordering="mmd_symmetric")(np.ascontiguousarray(rhs))
+        Xw[unknown] = factor_spd(Luu)(np.ascontiguousarray(rhs))
         kw[unknown[reach]] = True
     if not kw.all():
         from scipy.spatial import cKDTree
