@@ -39,21 +39,22 @@ term) can lock onto that layout -- help a real scan would not give. Errors are
 still measured against the original target vertex i.
 
 Results (12 pairs; shared 2-core machine under load, times are wall-clock
-medians; user CPU ~ wall now that no thread pools are spawned)::
+medians; user CPU ~ wall now that no thread pools are spawned; the fit rows
+re-measured 2026-12-02 with the blended reference shape, see ``--families``)::
 
     | landmarks | method  | mean all % | p95 all % | mean skin % | p95 skin % |
     | 27        | TPS     | 1.36       | 5.74      | 1.90        | 7.08       |
     | 27        | TPS+STK | 1.07       | 4.29      | 1.43        | 5.32       |
-    | 27        | fit     | 0.18       | 0.79      | 0.29        | 1.18       |
+    | 27        | fit     | 0.14       | 0.50      | 0.20        | 0.81       |
     | 10        | TPS     | 2.10       | 8.22      | 2.83        | 10.72      |
     | 10        | TPS+STK | 1.73       | 6.75      | 2.24        | 8.35       |
-    | 10        | fit     | 0.33       | 1.99      | 0.42        | 2.39       |
+    | 10        | fit     | 0.29       | 1.45      | 0.29        | 1.32       |
 
     remeshed targets (--remeshed):
     | 27        | TPS+STK | 1.09       | 4.28      | 1.44        | 5.31       |
-    | 27        | fit     | 0.63       | 1.75      | 0.83        | 2.29       |
+    | 27        | fit     | 0.55       | 1.50      | 0.69        | 1.83       |
     | 10        | TPS+STK | 1.75       | 6.73      | 2.25        | 8.34       |
-    | 10        | fit     | 0.75       | 2.44      | 0.95        | 2.76       |
+    | 10        | fit     | 0.72       | 2.20      | 0.84        | 2.33       |
 
     median s (27 lm): TPS 0.045, stick 0.16; fit total 1.27 = tps 0.045 +
     setup 0.41 + least squares 0.58 + stick 0.13 (coarse 8k-vertex solve

@@ -4,6 +4,7 @@
     python gallery/make_gallery.py --only ict_neutral
     python gallery/make_gallery.py --only landmarks     # the four landmark previews below
     python gallery/make_gallery.py --only expressions   # the six emotions on four heads
+    python gallery/make_gallery.py --only arkit         # arkit_shapes and arkit_capture
 
 Each picture is a rig made by ``autobones.place`` right now (no cached data),
 rendered by ``autobones.render`` from the front, three-quarter and side views in
@@ -29,6 +30,21 @@ closed and opened 20 degrees by linear blend skinning: no torn flap.
 (Erdoğdu 2010, Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
 transferred rig, neutral first, all from the front at one scale; the skin is tinted
 orange by how far each vertex moved (relative to the largest motion in the row).
+
+``arkit_shapes``: the ARKit blendshapes carried by ``autobones.transfer(..., arkit=True)`` onto
+four heads (rows, top to bottom: the james scan, the ICT identity002 sculpt, the robot, the goat),
+columns neutral, jawOpen, mouthSmileLeft, eyeBlinkLeft, browInnerUp, mouthPucker, cheekPuff, each
+posed at weight 1 by ``rig.pose(arkit=...)``; front view, one scale a head, tinted orange by motion
+relative to the row's largest (ARKit's Left is the subject's left: the picture's right). The scan's
+lips and lids are one closed surface, so its jawOpen stretches a closed mouth and its blink only
+lowers the lid skin; the robot and the goat have no lids to close (their blinks dent the eyeball /
+the skin above the eye).
+
+``arkit_capture``: a synthetic 2 s, 30 fps Live Link Face CSV written in code (a blink, a smile,
+the jaw opening, the head turning 20 degrees to the subject's left with a half smile and the left
+outer brow up), read by ``autobones.arkit.capture.read_capture`` and played on ICT identity002 at
+five frames (rest and each peak): the ARKit weights by ``rig.pose(arkit=...)``, the head yaw by the
+head bone, the shapes turned with the head; front view, tinted by the shapes' displacement.
 """
 from __future__ import annotations
 
@@ -246,20 +262,180 @@ def head_turn_picture(out, degrees=15.0, size=360):
     print(f"{path}: {', '.join(TURN_HEADS)}, head turned {degrees:g} degrees")
 
 
+ARKIT_HEADS = {  # label: (mesh under ../shared/data, landmark file under ../shared/data or the project)
+    "james (scan)": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
+    "ICT identity002 (sculpt)": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
+    "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
+    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
+}
+ARKIT_SHAPES = ("jawOpen", "mouthSmileLeft", "eyeBlinkLeft", "browInnerUp", "mouthPucker", "cheekPuff")
+ARKIT_PICTURES = ["arkit_shapes", "arkit_capture"]
+
+
+def arkit_rig(label):
+    """The head ``label`` of :data:`ARKIT_HEADS` transferred with its ARKit shapes."""
+    mesh, marks = ARKIT_HEADS[label]
+    marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+    return autobones.transfer(DATA / mesh, marks, arkit=True)
+
+
+def motion_strip(rig, poses, labels, width, note=None, moved=None):
+    """Front views of ``poses`` (each (n, 3), input frame) side by side at one scale, ``width``
+    pixels in all (the height follows the head's shape), the skin tinted orange by how far each
+    vertex moved from the rest (or by ``moved``, one (n,) array a pose, mesh units), relative to
+    the largest of all poses; each labelled below; ``note`` (str) is written under the strip's
+    left end. Returns (image (h, w, 3) uint8, largest motion in mesh units)."""
+    V0 = rig.frame.to_canonical(rig.vertices)
+    if moved is None:
+        moved = [np.linalg.norm(P - rig.vertices, axis=1) for P in poses]
+    top = max(float(m.max()) for m in moved) or 1.0
+    step = 1.1 * float(np.ptp(V0[:, 0]))
+    F = np.asarray(rig.faces)
+    Vall, Fall, Call, marks_at = [], [], [], []
+    base = np.array([0.85, 0.85, 0.85])
+    hot = np.array([1.0, 0.45, 0.1])
+    below = V0[:, 1].min() - 0.04 * np.ptp(V0[:, 1])
+    for k, (P, m) in enumerate(zip(poses, moved)):
+        off = np.array([k * step, 0.0, 0.0])
+        Vall.append(rig.frame.to_canonical(P) + off)
+        Fall.append(F + k * len(P))
+        a = np.clip(m / top, 0.0, 1.0)[:, None] ** 0.7
+        Call.append((1 - a) * base + a * hot)
+        marks_at.append(np.array([V0[:, 0].mean(), below, V0[:, 2].max()]) + off)
+    labels = list(labels)
+    if note is not None:  # a second marker line under the first column
+        marks_at.append(np.array([V0[:, 0].min(), below - 0.06 * np.ptp(V0[:, 1]), V0[:, 2].max()]))
+        labels.append(note)
+    V, F2, C = np.concatenate(Vall), np.concatenate(Fall), np.concatenate(Call)
+    height = float(np.ptp(V0[:, 1])) * 1.12
+    size = max(int(width * 1.1 * height / (len(poses) * step)), 1)
+    img = render.render_views(V, F2, vertex_colors=C, views=("front",), size=(width, size),
+                              points=np.array(marks_at), point_labels=labels, point_color=(60, 60, 60))
+    return img, top
+
+
+def arkit_shapes_picture(out, width=2800):
+    """``arkit_shapes.png``: each head of :data:`ARKIT_HEADS` transferred with ``arkit=True``, neutral
+    and the :data:`ARKIT_SHAPES` posed at weight 1 by ``rig.pose(arkit=...)``, front view, one row a
+    head at its own scale, tinted by motion relative to the row's largest."""
+    rows = []
+    for label in ARKIT_HEADS:
+        rig = arkit_rig(label)
+        poses = [rig.vertices] + [rig.pose(arkit={n: 1.0}) for n in ARKIT_SHAPES]
+        flips = rig.arkit["flipped_triangles"]
+        img, top = motion_strip(rig, poses, ["neutral"] + list(ARKIT_SHAPES), width, note=label)
+        rows.append(img)
+        print(f"{label}: largest motion {top:.3g} (mesh units); folded triangles "
+              + ", ".join(f"{n} {flips.get(n, 0)}" for n in ARKIT_SHAPES))
+    path = Path(out) / "arkit_shapes.png"
+    render.save_png(path, np.concatenate(rows, axis=0))
+    print(f"{path}: {', '.join(ARKIT_HEADS)}; neutral, {', '.join(ARKIT_SHAPES)}")
+
+
+CAPTURE_HEAD = "ICT identity002 (sculpt)"  # key of ARKIT_HEADS
+CAPTURE_FPS = 30.0
+CAPTURE_FRAMES = {6: "blink", 21: "smile", 36: "jaw open", 53: "head turn, half smile"}  # frame: what peaks
+
+
+def write_capture_csv(path, seconds=2.0, fps=CAPTURE_FPS):
+    """A synthetic Live Link Face CSV (the layout :func:`autobones.arkit.capture.read_capture` reads):
+    a blink peaking at 0.2 s, a smile at 0.7 s, the jaw open at 1.2 s, then the head turning 20
+    degrees toward the subject's left (reached at 1.77 s, then held) with a half smile and the left
+    brow raised; smooth bumps and ramps."""
+    from autobones.arkit.names import ARKIT_NAMES, CAPTURE_ANGLES, capture_column
+
+    t = np.arange(int(round(seconds * fps))) / fps
+
+    def bump(start, end):  # 0 outside [start, end], sin^2 up to 1 at the middle
+        x = np.clip((t - start) / (end - start), 0.0, 1.0)
+        return np.sin(np.pi * x) ** 2
+
+    w = {n: np.zeros_like(t) for n in ARKIT_NAMES}
+    late = np.clip((t - 1.4) / 0.3, 0.0, 1.0)
+    for side in ("Left", "Right"):
+        w[f"eyeBlink{side}"] = bump(0.0, 0.4)
+        w[f"mouthSmile{side}"] = bump(0.4, 1.0) + 0.5 * late
+    w["jawOpen"] = 0.8 * bump(0.9, 1.5)
+    w["browOuterUpLeft"] = late
+    angles = {n: np.zeros_like(t) for n in CAPTURE_ANGLES}
+    ramp = np.clip((t - 1.3) / 0.47, 0.0, 1.0)
+    angles["HeadYaw"] = np.radians(20.0) * (3 * ramp ** 2 - 2 * ramp ** 3)
+    header = ["Timecode", "BlendShapeCount"] + [capture_column(n) for n in ARKIT_NAMES] + list(CAPTURE_ANGLES)
+    lines = [",".join(header)]
+    for i in range(len(t)):
+        s, f = divmod(i, int(fps))
+        lines.append(",".join([f"00:00:{s:02d}:{f:02d}.000", str(len(ARKIT_NAMES) + len(CAPTURE_ANGLES))]
+                              + [f"{w[n][i]:.5f}" for n in ARKIT_NAMES]
+                              + [f"{angles[n][i]:.5f}" for n in CAPTURE_ANGLES]))
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def arkit_capture_picture(out, width=2000):
+    """``arkit_capture.png``: a synthetic capture (:func:`write_capture_csv`) read by
+    ``read_capture`` and played on :data:`CAPTURE_HEAD` at the frames :data:`CAPTURE_FRAMES` (and
+    frame 0): the frame's ARKit weights posed by ``rig.pose(arkit=...)``, its head angles by the head
+    bone (``rig.pose(head_deg=...)``, linear blend skinning) with the shapes' displacements turned
+    with the head as a glTF player does (the face follows the head bone fully); front view, tinted
+    by the shapes' displacement (not the head turn, which would swamp it)."""
+    import tempfile
+
+    from autobones.arkit.animation import canonical_turns
+    from autobones.arkit.capture import read_capture
+
+    rig = arkit_rig(CAPTURE_HEAD)
+    with tempfile.TemporaryDirectory() as tmp:
+        csv_path = Path(tmp) / "synthetic_live_link_face.csv"
+        write_capture_csv(csv_path)
+        cap = read_capture(csv_path, fps=CAPTURE_FPS)
+    frames = {0: "rest", **CAPTURE_FRAMES}
+    poses, labels, moved = [], [], []
+    R, s = rig.frame.rotation, rig.frame.size
+    for i, what in frames.items():
+        weights = {n: float(v[i]) for n, v in cap.weights.items() if v[i] != 0}
+        yaw, pitch, roll = (float(cap.angles[c][i]) for c in ("HeadYaw", "HeadPitch", "HeadRoll"))
+        offset = rig.arkit_offset(weights)
+        if not (yaw or pitch or roll):
+            P = rig.vertices if offset is None else rig.vertices + offset
+        else:
+            P = rig.pose(head_deg=tuple(np.degrees([pitch, yaw, roll])))
+            if offset is not None:  # canonical displacement, turned with the head, back to the input frame
+                turn = canonical_turns([yaw], [pitch], [roll])[0]
+                P = P + ((offset @ R.T / s) @ turn.T * s) @ R
+        poses.append(P)
+        moved.append(np.zeros(len(P)) if offset is None else np.linalg.norm(offset, axis=1))
+        shown = ", ".join(f"{n} {v:.2f}" for n, v in sorted(weights.items()) if v >= 0.05) or "-"
+        turn_text = f"; head yaw {np.degrees(yaw):.0f} deg" if yaw else ""
+        labels.append(f"{cap.times[i]:.2f} s {what}")
+        print(f"frame {i} ({cap.times[i]:.2f} s, {what}): {shown}{turn_text}")
+    img, top = motion_strip(rig, poses, labels, width, moved=moved,
+                            note=f"{CAPTURE_HEAD}, {len(cap.times)} frames at {CAPTURE_FPS:g} fps")
+    path = Path(out) / "arkit_capture.png"
+    render.save_png(path, img)
+    print(f"{path}: {len(frames)} frames of {len(cap.times)}; largest shape motion {top:.3g} (mesh units)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
-                    + ["expressions", "jaw_open_goat_robot", "place_head_turn"],
-                    help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads")
+                    + ["expressions", "jaw_open_goat_robot", "place_head_turn"] + ARKIT_PICTURES + ["arkit"],
+                    help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
+                         "'arkit': arkit_shapes and arkit_capture")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
-                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn"])
+                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn"] + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
-                                         expression_pictures if n == "expressions" else [n])]
+                                         expression_pictures if n == "expressions" else
+                                         ARKIT_PICTURES if n == "arkit" else [n])]
     for name in names:
+        if name == "arkit_shapes":
+            arkit_shapes_picture(args.out)
+            continue
+        if name == "arkit_capture":
+            arkit_capture_picture(args.out)
+            continue
         if name == "jaw_open_goat_robot":
             jaw_open_picture(args.out)
             continue
