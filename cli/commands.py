@@ -170,15 +170,24 @@ def cmd_build_rig(args):
     from autobones.errors import AutobonesError
 
     folder = os.path.realpath(args.output)
-    for inp in (args.base, args.landmarks):  # the output folder is replaced as a whole
-        if os.path.realpath(inp) == folder or os.path.realpath(inp).startswith(folder + os.sep):
+    for inp in (args.base, args.landmarks, args.shapes):  # the output folder is replaced as a whole
+        if inp and (os.path.realpath(inp) == folder or os.path.realpath(inp).startswith(folder + os.sep)):
             raise AutobonesError(f"{args.output}: the output folder holds the input {inp}, and is replaced as a "
                                  "whole; choose another folder (-o)")
     t = time.perf_counter()
+    shapes = None
+    if args.shapes:  # read and checked before anything is built or written
+        from autobones.arkit.studio import read_studio_shapes, write_shape_set
+
+        shapes = read_studio_shapes(args.shapes)
     rig = autobones.build_rig(args.base, args.landmarks)
     rig.save(args.output)
+    if shapes is not None:
+        write_shape_set(shapes, args.output)
     print(f"{args.output}: {len(rig.skeleton)} bones, {len(rig.muscles)} muscles, {len(rig.fields)} fields, "
-          f"{len(rig.landmarks)} landmarks, {len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s")
+          f"{len(rig.landmarks)} landmarks, {len(rig.vertices)} vertices"
+          + (f", ARKit shapes {len(shapes.deltas)} given ({len(shapes.meta['absent'])} absent)" if shapes else "")
+          + f", {time.perf_counter() - t:.1f} s")
     return 0
 
 
@@ -276,21 +285,20 @@ def cmd_export(args):
 
 
 def cmd_animate(args):
-    from autobones.arkit.animation import capture_glb
+    from autobones.arkit.animation import save_animated_rig
     from autobones.arkit.capture import read_capture
     from autobones.errors import AutobonesError
-    from autobones.io.atomic import write_bytes_atomic
 
     if not args.output.lower().endswith(".glb"):
         raise AutobonesError(f"{args.output}: the animation is written as a .glb")
-    _never_the_input([args.output], [*_rig_outputs(args.rig), args.capture])
+    _never_the_input(_rig_outputs(args.output), [*_rig_outputs(args.rig), args.capture])
     t = time.perf_counter()
     capture = read_capture(args.capture, fps=number(args.fps, "--fps"))
-    data = capture_glb(args.rig, capture, bones=not args.no_bones)
-    write_bytes_atomic(args.output, data, "the animation")
+    written = save_animated_rig(args.rig, capture, args.output, bones=not args.no_bones)
     print(f"{args.output}: {len(capture.times)} frames, {capture.times[-1]:.2f} s, {len(capture.weights)} ARKit "
           f"shapes" + ("" if args.no_bones or not capture.angles else ", head and eye turns")
-          + f", {time.perf_counter() - t:.1f} s")
+          + f", {time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, "
+          f"{os.path.basename(written[2])}")
     return 0
 
 

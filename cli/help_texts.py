@@ -63,6 +63,9 @@ BUILD_EPILOG = """\
 examples:
   autobones build-rig base.obj --landmarks base.landmarks.json -o my_rig/
   autobones transfer scan.obj --landmarks scan.landmarks.json --rig my_rig/ -o scan.glb
+  autobones build-rig base.obj --landmarks base.landmarks.json -o my_rig/ --shapes studio_arkit/
+  autobones transfer scan.obj --landmarks scan.landmarks.json --rig my_rig/ --arkit -o scan.glb
+                                        the studio's ARKit shapes (not ICT-FaceKit's) on the scan
 """
 
 BATCH_EPILOG = """\

@@ -71,8 +71,9 @@ def add_transfer(sub):
                         "implies --expressions")
     t.add_argument("--arkit", action="store_true",
                    help="also write ARKit's 52 face blendshapes as morph targets named as ARKit does (eyeBlinkLeft, "
-                        "jawOpen, ...; Left = the subject's left), made for this head from ICT-FaceKit's set by "
-                        "deformation transfer; tongueOut is written empty (ICT has none)")
+                        "jawOpen, ...; Left = the subject's left), made for this head from ICT-FaceKit's set (or the "
+                        "--rig folder's own set, build-rig --shapes) by deformation transfer; tongueOut is "
+                        "written empty (ICT has none)")
     _common(t)
 
 
@@ -137,6 +138,11 @@ def add_build_rig(sub):
     b.add_argument("base", help="base head mesh file")
     b.add_argument("--landmarks", required=True, help="the base head's landmark file (names the rig needs: see below)")
     b.add_argument("-o", "--output", required=True, help="output folder (rig.json, mesh.obj, fields.npz)")
+    b.add_argument("--shapes", metavar="FOLDER",
+                   help="a studio's own ARKit shape set, stored in the rig folder (arkit/) so `transfer --rig "
+                        "DIR --arkit` carries it instead of ICT-FaceKit's: neutral.obj, neutral.landmarks.json "
+                        "and one posed mesh per ARKit name (jawOpen.obj, eyeBlinkLeft.obj, ...) with the "
+                        "neutral's vertices in order; names without a mesh are absent (empty targets)")
     _common(b)
 
 

@@ -294,7 +294,7 @@ def test_animate_refuses_bad_captures_and_writes_nothing(saved, tmp_path, case, 
         p.write_text("Time,Count,EyeBlinkLeft\n1,2,3\n")
     out = run(["animate", str(saved), "--capture", str(p), "-o", "take.glb"], tmp_path)
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and message in out.stderr, out.stderr
-    assert not (tmp_path / "take.glb").exists()
+    assert not any((tmp_path / f).exists() for f in ("take.glb", "take.rig.json", "take.weights.npz"))
 
 
 def test_animate_writes_weight_keys_and_bone_turns_that_validate(saved, tmp_path):
@@ -321,3 +321,101 @@ def test_animate_writes_weight_keys_and_bone_turns_that_validate(saved, tmp_path
     report = run_validator(tmp_path / "take.glb")
     assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
     assert report["info"]["animationCount"] == 1
+    # a whole rig: its sidecars beside it, so load_rig, export and view read it like any other
+    again = autobones.load_rig(tmp_path / "take.glb")
+    assert set(again.arkit_targets) == set(ARKIT_NAMES)
+    np.testing.assert_array_equal(again.vertices, autobones.load_rig(saved).vertices)
+
+
+# --------------------------------------------------------------------------- a studio's own shape set
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory):
+    """A studio's shapes folder: ICT identity000 as the neutral and three shapes posed from tests/data's ICT
+    expressions; ``mouthSmileRight`` is deliberately ICT's *left* smile, so a rig carrying ICT's set instead
+    would move the other side. Returns (folder, {name: displacement (n, 3)})."""
+    folder = tmp_path_factory.mktemp("studio") / "shapes"
+    folder.mkdir()
+    from autobones.io.obj import write_obj
+
+    V, F = read_obj(data("ict/identity000.obj"))
+    neutral, _ = read_obj(data("ict/generic_neutral_mesh.obj"))
+    jaw = read_obj(data("ict/jawOpen.obj"))[0] - neutral
+    smile = read_obj(data("ict/mouthSmile_L.obj"))[0] - neutral
+    shapes = {"jawOpen": jaw, "mouthSmileRight": smile, "mouthFunnel": 0.5 * jaw + 0.5 * smile}
+    write_obj(folder / "neutral.obj", V, F)
+    (folder / "neutral.landmarks.json").write_bytes(data("ict/identity000.landmarks.json").read_bytes())
+    for name, D in shapes.items():
+        write_obj(folder / f"{name}.obj", V + D, F)
+    (folder / "notes.txt").write_text("other files are ignored\n")
+    return folder, shapes
+
+
+@pytest.fixture(scope="module")
+def studio_rig(studio, tmp_path_factory):
+    """build-rig on the default head with the studio's set, then transfer identity000 --rig DIR --arkit (CLI)."""
+    work = tmp_path_factory.mktemp("studio_rig")
+    base = ROOT / "generic_rig"
+    built = run(["build-rig", str(base / "default_head.obj"), "--landmarks", str(base / "default_head.landmarks.json"),
+                 "-o", "rig", "--shapes", str(studio[0])], work)
+    assert built.returncode == 0, built.stderr
+    out = run(["transfer", str(data("ict/identity000.obj")), "--landmarks", str(data("ict/identity000.landmarks.json")),
+               "--rig", "rig", "--arkit", "-o", "id0.glb"], work)
+    assert out.returncode == 0, out.stderr
+    return work, built, out
+
+
+def test_build_rig_stores_a_studio_set_in_the_packaged_format(studio, studio_rig):
+    work, built, _ = studio_rig
+    assert "3 given (49 absent)" in built.stdout, built.stdout
+    assert sorted(os.listdir(work / "rig" / "arkit")) == ["ict_arkit.json", "ict_arkit.npz"]
+    S = load_shapes(work / "rig" / "arkit")
+    assert S.names == ["jawOpen", "mouthFunnel", "mouthSmileRight"]  # ARKit's order
+    assert S.meta["absent"] == [n for n in ARKIT_NAMES if n not in S.names]
+    # the neutral's skin (its largest part), the displacements as given there
+    V, F = read_obj(studio[0] / "neutral.obj")
+    skin = _skin(V, F)
+    np.testing.assert_allclose(S.vertices, V[skin], atol=1e-5)
+    np.testing.assert_allclose(S.deltas["jawOpen"], studio[1]["jawOpen"][skin], atol=1e-5)
+    assert set(S.landmarks) == set(json.loads((studio[0] / "neutral.landmarks.json").read_text())["landmarks"])
+
+
+def test_transfer_with_the_studio_set_gives_the_studios_shapes_back(studio, studio_rig):
+    work, _, out = studio_rig
+    rig = autobones.load_rig(work / "id0.glb")
+    rec = rig.arkit
+    assert "studio" in rec["source"] and rec["absent"] == [n for n in ARKIT_NAMES if n not in studio[1]]
+    assert list(rig.arkit_targets) == list(ARKIT_NAMES)  # every client still finds its 52 names
+    assert all(not np.any(rig.arkit_targets[n]) for n in rec["absent"])
+    skin = _skin(rig.vertices, rig.faces)
+    for name, D in studio[1].items():
+        got = rig.arkit_targets[name]
+        explained = 1 - np.linalg.norm(got[skin] - D[skin]) / np.linalg.norm(D[skin])
+        assert explained >= 0.99, (name, explained)  # measured 0.998 (jawOpen, mouthSmileRight, mouthFunnel)
+    # the studio's (mislabelled) mouthSmileRight moves the subject's left, not ICT's right-side smile
+    d = np.linalg.norm(rig.arkit_targets["mouthSmileRight"], axis=1)
+    m = d > 0.3 * d.max()
+    assert m.sum() > 20 and (rig.frame.to_canonical(rig.vertices[m])[:, 0] > 0).all()
+
+
+@pytest.mark.parametrize("case, message", [
+    ("unknown", "unknown ARKit shape name(s): jawopen (did you mean jawOpen?)"),
+    ("count", "vertex count differs from neutral.obj's"),
+    ("neutral", "no neutral.obj"),
+])
+def test_build_rig_refuses_a_bad_shapes_folder_and_writes_nothing(studio, tmp_path, case, message):
+    bad = tmp_path / "shapes"
+    bad.mkdir()
+    for f in ("neutral.obj", "neutral.landmarks.json", "jawOpen.obj"):
+        os.symlink(studio[0] / f, bad / f)
+    if case == "unknown":
+        os.symlink(studio[0] / "mouthFunnel.obj", bad / "jawopen.obj")
+    elif case == "count":
+        (bad / "mouthClose.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    else:
+        os.remove(bad / "neutral.obj")
+    base = ROOT / "generic_rig"
+    out = run(["build-rig", str(base / "default_head.obj"), "--landmarks", str(base / "default_head.landmarks.json"),
+               "-o", "rig", "--shapes", str(bad)], tmp_path)
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and message in out.stderr, out.stderr
+    assert not (tmp_path / "rig").exists()

@@ -111,3 +111,40 @@ def capture_glb(rig_path, capture, bones=True):
     asset["extras"] = extras
     doc["asset"] = asset
     return pack_glb(doc, body)
+
+
+def save_animated_rig(rig_path, capture, out_path, bones=True):
+    """Write ``out_path`` (a .glb: the rig with the capture's animation, :func:`capture_glb`) and
+    the rig's two sidecars beside it under its name, all three or none, so the animated file is a
+    whole rig that ``load_rig``, ``export`` and ``view`` read like any other.
+
+    Returns the three paths written (glb, rig.json, weights.npz).
+    """
+    import os
+
+    from ..io.atomic import replace_all, temp_beside
+    from ..rig import sidecar_paths
+
+    data = capture_glb(rig_path, capture, bones=bones)
+    sources = sidecar_paths(rig_path)
+    targets = (os.fspath(out_path), *sidecar_paths(out_path))
+    staged = []
+    try:
+        for target, payload in zip(targets, (data, *sources)):
+            fd, tmp = temp_beside(target, suffix=os.path.splitext(target)[1])
+            staged.append((tmp, target))
+            with os.fdopen(fd, "wb") as fh:
+                if isinstance(payload, (bytes, bytearray)):
+                    fh.write(payload)
+                else:
+                    with open(payload, "rb") as src:
+                        fh.write(src.read())
+    except OSError as exc:
+        for tmp, _ in staged:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        raise AutobonesError(f"{out_path}: cannot write the animated rig ({exc.strerror or exc}); nothing was written") \
+            from None
+    return replace_all(staged, "the animated rig")

@@ -16,6 +16,9 @@ from ..errors import AutobonesError
 from .names import ABSENT, ARKIT_NAMES
 
 
+NPZ, JSON = "ict_arkit.npz", "ict_arkit.json"  # the set's two files (the packaged set's names, kept for any set)
+
+
 def shapes_folder():
     """Folder of the packaged shape set (``generic_rig/arkit``)."""
     from ..generic_rig import HERE
@@ -50,11 +53,20 @@ class ShapeSet:
         return [n for n in ARKIT_NAMES if n in self.deltas]
 
 
-@functools.lru_cache(maxsize=2)
 def load_shapes(folder=None):
-    """The :class:`ShapeSet` in ``folder`` (None: the packaged ICT-FaceKit set). Cached: do not modify it."""
+    """The :class:`ShapeSet` in ``folder`` (None: the packaged ICT-FaceKit set; a rig folder's
+    ``arkit/`` from ``build-rig --shapes`` has the same files). Cached: do not modify it."""
     folder = shapes_folder() if folder is None else os.fspath(folder)
-    npz, js = os.path.join(folder, "ict_arkit.npz"), os.path.join(folder, "ict_arkit.json")
+    try:  # the file's time in the key: a rig folder rebuilt in place is read again
+        stamp = os.stat(os.path.join(folder, NPZ)).st_mtime_ns
+    except OSError:
+        stamp = None
+    return _load(folder, stamp)
+
+
+@functools.lru_cache(maxsize=4)
+def _load(folder, stamp):
+    npz, js = os.path.join(folder, NPZ), os.path.join(folder, JSON)
     try:
         with open(js, encoding="utf-8") as fh:
             meta = json.load(fh)
@@ -71,7 +83,8 @@ def load_shapes(folder=None):
     except (OSError, KeyError, ValueError) as exc:
         raise AutobonesError(f"{folder}: not a readable ARKit shape set ({type(exc).__name__}: {exc}); "
                              "build it with generic_rig/build_arkit_shapes.py") from None
-    missing = [n for n in ARKIT_NAMES if n not in deltas and n not in ABSENT]
+    # a set may leave names out when its sidecar lists them as absent (a studio's own set)
+    missing = [n for n in ARKIT_NAMES if n not in deltas and n not in ABSENT and n not in meta.get("absent", ())]
     if missing:
         raise AutobonesError(f"{folder}: the shape set lacks {', '.join(missing)}")
     landmarks = {k: np.asarray(v, dtype=np.float64) for k, v in meta["landmarks"].items()}

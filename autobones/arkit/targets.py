@@ -125,7 +125,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     rig : Rig
         A rig with ``landmarks`` (``autobones.transfer``), input frame and units.
     shapes : ShapeSet or None
-        The source set (None: the packaged ICT-FaceKit set).
+        The source set (None: the set of the generic rig folder the rig was transferred from,
+        ``options['rig']``, when ``build-rig --shapes`` gave it one, else the packaged ICT-FaceKit set).
     method : "deformation" or "copy"
         Deformation transfer, or the copy baseline (:mod:`.copy_baseline`; for comparison).
     timings : dict, optional
@@ -144,7 +145,11 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     """
     from ..rig_transfer.correspondence import dense_correspondence
 
-    S = load_shapes() if shapes is None else shapes
+    if shapes is None:  # a rig folder built with a studio's own set (build-rig --shapes) carries it
+        from .studio import rig_shapes_folder
+
+        shapes = load_shapes(rig_shapes_folder((getattr(rig, "options", None) or {}).get("rig")))
+    S = shapes
     lm = rig.landmarks or {}
     shared = [n for n in S.landmarks if n in lm]
     if len(shared) < MIN_LANDMARKS:
@@ -182,7 +187,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
         names_b = rig.skeleton.names
         for name in EYE_LOOK:
             eye = "eye_l" if name.endswith("Left") else "eye_r"
-            if eye in eyes:
+            if eye in eyes and name in by_name:  # a set without the shape leaves it absent (all zero)
                 m = eyes[eye]
                 c = rig.skeleton.heads[names_b.index(eye)]
                 R = eye_turn(name, rig.frame.rotation)
