@@ -13,7 +13,9 @@ Method
 2. Up and front: the two remaining input axes, projected into the symmetry
    plane, give 8 signed (up, front) choices. When one direction clearly has a
    cut at its far end (a flat base or an open rim: neck cut, bust base), it is
-   down. The remaining choices are scored by how well the head's top slice
+   down -- unless the mesh is a face-only capture: an open shell (its
+   area-weighted normals sum to a large part of its area) faces away from its
+   opening, which is then its back, and only the fronts along that way stay. The remaining choices are scored by how well the head's top slice
    (1.2 head widths tall, so shoulders and bust bases don't count) overlays the
    same slice of a reference head (the built-in default head): a trimmed
    similarity ICP that may turn by at most 35 degrees, so a tilted head still

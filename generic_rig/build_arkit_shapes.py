@@ -30,7 +30,7 @@ sys.path.insert(0, ROOT)
 
 from autobones.arkit.names import ABSENT, ARKIT_NAMES, ict_names  # noqa: E402
 from autobones.geometry.normals import triangle_normals  # noqa: E402
-from autobones.geometry.topology import mesh_parts  # noqa: E402
+from autobones.geometry.topology import largest_part  # noqa: E402
 from autobones.io.obj import read_obj  # noqa: E402
 
 OUT = os.path.join(ROOT, "generic_rig", "arkit")
@@ -39,12 +39,7 @@ MOVES = 1e-4  # cm: 1 micrometre; below it a vertex is stored as not moving
 
 def main(ict=os.path.join(ROOT, "..", "shared", "data", "ict")):
     V, F = read_obj(os.path.join(ict, "generic_neutral_mesh.obj"))
-    part = mesh_parts(len(V), F)
-    skin_part = np.argmax(np.bincount(part))
-    skin = np.flatnonzero(part == skin_part)
-    remap = -np.ones(len(V), dtype=np.int64)
-    remap[skin] = np.arange(len(skin))
-    Fs = remap[F[part[F[:, 0]] == skin_part]]
+    _, Fs, skin = largest_part(V, F)
     with np.load(os.path.join(ict, "ict_facekit_shapes.npz")) as z:
         neutral = z["neutral"]
         expr = {k[len("expression/"):]: z[k].astype(np.float64) for k in z.files if k.startswith("expression/")}

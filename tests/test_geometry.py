@@ -8,7 +8,7 @@ from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
 from autobones.geometry.rotations import rotate_between
 from autobones.geometry.smooth import ramp, smoothstep, step
-from autobones.geometry.topology import boundary_vertices, mesh_edges, mesh_parts, weld
+from autobones.geometry.topology import boundary_vertices, largest_part, mesh_edges, mesh_parts, weld
 from autobones.geometry.validate import mesh_arrays
 from autobones.io.mesh import load_mesh
 from shared_data import data, icosphere
@@ -48,6 +48,16 @@ def test_parts_edges_and_boundary_of_two_open_triangles_and_a_sphere():
     F2 = np.array([[0, 1, 2], [3, 4, 5]])
     assert list(mesh_parts(7, F2)) == [0, 0, 0, 1, 1, 1, 2]             # vertex 6 alone: its own part
     assert boundary_vertices(6, F2).all()
+
+
+def test_largest_part_is_a_mesh_of_its_own():
+    # a 2-triangle quad (4 vertices) beside a lone triangle (3), listed first
+    V = np.array([[9, 9, 9], [9, 8, 9], [8, 9, 9], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    F = np.array([[0, 1, 2], [3, 4, 5], [3, 5, 6]])
+    Vs, Fs, index = largest_part(V, F)
+    np.testing.assert_array_equal(index, [3, 4, 5, 6])
+    np.testing.assert_array_equal(Vs, V[3:])
+    np.testing.assert_array_equal(Vs[Fs], V[F[1:]])
 
 
 def test_weld_merges_copies_and_drops_collapsed_faces():

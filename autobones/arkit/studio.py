@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..geometry.normals import triangle_normals
-from ..geometry.topology import mesh_parts
+from ..geometry.topology import largest_part
 from .names import ARKIT_NAMES
 from .shapes import NPZ, JSON, ShapeSet
 
@@ -81,13 +81,7 @@ def read_studio_shapes(folder):
     if bad:
         raise AutobonesError(f"{folder}: vertex count differs from {NEUTRAL}'s {len(V)}: {', '.join(bad)} "
                              "(posed meshes keep the neutral's vertices, in order)")
-    part = mesh_parts(len(V), F)
-    skin_part = np.argmax(np.bincount(part))
-    skin = np.flatnonzero(part == skin_part)
-    remap = -np.ones(len(V), dtype=np.int64)
-    remap[skin] = np.arange(len(skin))
-    Fs = remap[F[part[F[:, 0]] == skin_part]]
-    Vs = V[skin]
+    Vs, Fs, skin = largest_part(V, F)
     deltas = {n: (posed[n] - V)[skin].astype(np.float32).astype(np.float64) for n in ARKIT_NAMES if n in posed}
     given = [n for n in ARKIT_NAMES if n in deltas]
     meta = {

@@ -37,6 +37,32 @@ def mesh_parts(n, F):
     return connected_components(A, directed=False)[1]
 
 
+def largest_part(V, F):
+    """The largest connected part (most vertices) of a mesh as a mesh of its own.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    Vs : (k, 3) float
+        Its vertices, in their order in ``V``.
+    Fs : (m', 3) int64
+        Its triangles, indexing ``Vs``.
+    index : (k,) int64
+        Where each of ``Vs`` is in ``V``.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    part = mesh_parts(len(V), F)
+    biggest = np.argmax(np.bincount(part))
+    index = np.flatnonzero(part == biggest)
+    remap = -np.ones(len(V), dtype=np.int64)
+    remap[index] = np.arange(len(index))
+    return np.asarray(V)[index], remap[F[part[F[:, 0]] == biggest]], index
+
+
 def boundary_vertices(n, F):
     """Boolean ``(n,)``: the vertex lies on an edge used by exactly one triangle."""
     E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
