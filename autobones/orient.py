@@ -98,6 +98,17 @@ class Frame:
         """The input axis nearest to the direction the face looks, e.g. ``'-x'``."""
         return nearest_axis(self.rotation[2])
 
+    @classmethod
+    def from_dict(cls, d):
+        """The frame :meth:`to_dict` wrote (a sidecar's ``frame``); ``symmetry_error`` null or absent
+        (undefined, e.g. a transferred rig's) reads as NaN. KeyError / TypeError / ValueError on a
+        malformed dict."""
+        if not isinstance(d, dict):
+            raise TypeError(f"a frame is an object, not {type(d).__name__}")
+        sym = d.get("symmetry_error")
+        return cls(np.asarray(d["rotation"], dtype=np.float64), np.asarray(d["origin"], dtype=np.float64),
+                   float(d["head_size"]), float("nan") if sym is None else float(sym))
+
     def to_dict(self):
         return {
             "up": self.up, "front": self.front,

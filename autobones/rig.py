@@ -26,6 +26,9 @@ def sidecar_paths(glb_path):
     return base + ".rig.json", base + ".weights.npz"
 
 
+# what a ``.rig.json`` says it is (``format``); readers refuse anything else
+SIDECAR_FORMAT = "autobones-rig/1"
+
 # Sidecar keys beyond the Rig's own (bones, labels, frame...), in the order they are written:
 # one order for every pipeline, so the JSON text does not depend on which one filled them
 # (keys of ``Rig.other`` go just before ``expressions``, which ``save`` writes last).
@@ -171,7 +174,7 @@ class Rig:
         from .version import __version__
 
         return {
-            "format": "autobones-rig/1",
+            "format": SIDECAR_FORMAT,
             "autobones_version": __version__,
             "options": self.options,
             "frame": self.frame.to_dict(),

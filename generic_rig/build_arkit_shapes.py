@@ -29,7 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from autobones.arkit.names import ABSENT, ARKIT_NAMES, ict_names  # noqa: E402
-from autobones.geometry.normals import triangle_normals  # noqa: E402
+from autobones.arkit.shapes import flipped_triangles  # noqa: E402
 from autobones.geometry.topology import largest_part  # noqa: E402
 from autobones.io.obj import read_obj  # noqa: E402
 
@@ -63,8 +63,7 @@ def main(ict=os.path.join(ROOT, "..", "shared", "data", "ict")):
         stored = np.zeros_like(Ds)
         stored[idx] = d16
         # ICT's own shapes fold some triangles at weight 1 (mouthClose is meant on top of jawOpen)
-        folds[name] = int((np.einsum("ij,ij->i", triangle_normals(V[skin], Fs),
-                                     triangle_normals(V[skin] + stored, Fs)) < 0).sum())
+        folds.update(flipped_triangles(V[skin], Fs, {name: stored}))
         worst = max(worst, float(np.abs(d16.astype(np.float64) - Ds[idx]).max()))
     assert len(Fs) < 2 ** 31 and len(skin) < 2 ** 16
     os.makedirs(OUT, exist_ok=True)

@@ -45,6 +45,7 @@ import scipy.sparse as sp
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
+from ..geometry.normals import triangle_normals
 from ..geometry.topology import mesh_parts
 
 log = logging.getLogger(__name__)
@@ -139,8 +140,6 @@ class DeformationTransfer:
     ----------
     source_face_ : (m_t,) int64
         Source triangle of each target triangle (-1: none).
-    turn_ : (m_t, 3, 3) float64
-        Source -> target rotation applied to that triangle's gradients.
     anchored_ : (n_t,) bool
     covered_parts_ : (n_t,) bool
         Vertices of parts that take gradients; the others inherit (see :meth:`transform`).
@@ -186,6 +185,7 @@ class DeformationTransfer:
                                  "source vertices")
         self.V_src_, self.F_src_ = V_src, F_src
         n_t, m_t = len(V_tgt), len(F_tgt)
+        free = None if free is None else np.asarray(free, dtype=bool)
         # source triangle under each target triangle's centroid, on the source laid on the target
         cent = V_tgt[F_tgt].mean(axis=1)
         # more samples per target triangle than its centroid: halfway to each corner too, so a target
@@ -195,23 +195,22 @@ class DeformationTransfer:
         faces = face_all.reshape(len(pts), m_t).T  # (m_t, samples)
         face, d2 = faces[:, 0], d2_all[:m_t]
         edge = np.linalg.norm(V_tgt[F_tgt] - V_tgt[np.roll(F_tgt, 1, axis=1)], axis=2).mean()
-        nt = np.cross(V_tgt[F_tgt[:, 1]] - V_tgt[F_tgt[:, 0]], V_tgt[F_tgt[:, 2]] - V_tgt[F_tgt[:, 0]])
+        nt = triangle_normals(V_tgt, F_tgt)
         EP = triangle_frames(P, F_src)
         ns = EP[:, :, 2]
         cos = np.einsum("ij,ij->i", nt, ns[face]) / np.maximum(
             np.linalg.norm(nt, axis=1) * np.linalg.norm(ns[face], axis=1), 1e-300)
         covered = (np.sqrt(d2) <= self.max_distance * edge) & (cos > 0.5)
-        part = mesh_parts(n_t, F_tgt)
+        part = self._part = mesh_parts(n_t, F_tgt)
         fpart = part[F_tgt[:, 0]]
         frac = np.bincount(fpart, covered, minlength=part.max() + 1) / np.maximum(np.bincount(fpart), 1)
         covered &= frac[fpart] >= self.min_part_coverage
         if free is not None:
-            covered &= ~np.asarray(free, dtype=bool)
+            covered &= ~free
         self.covered_parts_ = frac[part] >= self.min_part_coverage
         self.source_face_ = np.where(covered, face, -1)
         # each source triangle's turn onto the target: rotation of the warp's gradient
         used = np.unique(faces[covered])
-        turn = np.tile(np.eye(3), (m_t, 1, 1))
         if len(used):
             R = np.zeros((len(F_src), 3, 3))
             if self.turn == "global":
@@ -230,9 +229,7 @@ class DeformationTransfer:
                         Wf = to_f @ (to_v @ Wf)
                     W = Wf.reshape(-1, 3, 3)
                 R[used] = polar_rotations(W[used])
-            turn[covered] = R[face[covered]]
             self._turn_src = R
-        self.turn_ = turn
         self._used = used
         # anchors: target vertices whose nearest source triangle never moves
         anchored = np.zeros(n_t, dtype=bool)
@@ -246,7 +243,7 @@ class DeformationTransfer:
         G, area = gradient_operator(V_tgt, F_tgt)
         # the triangles set free weigh little: held at Q = I with full weight, a scan's eye
         # surface would tie the upper lid to the lower one and no blink could close it
-        weight = np.ones(m_t) if free is None else np.where(np.asarray(free, dtype=bool), self.hole_weight, 1.0)
+        weight = np.ones(m_t) if free is None else np.where(free, self.hole_weight, 1.0)
         A3 = sp.diags(np.repeat(area * weight, 3))
         L = (G.T @ A3 @ G).tocsc()
         scale = float(L.diagonal().mean())
@@ -254,7 +251,6 @@ class DeformationTransfer:
         diag = self.anchor_weight * scale * anchored + self.screening * scale * mass / max(mass.mean(), 1e-300)
         # right-hand sides from the used source triangles' gradients: G^T A S, S picking each covered
         # target triangle's source triangle (rows 3t + c <- 3u + c)
-        covered = self.source_face_ >= 0
         slot = np.full(len(F_src), -1)
         slot[used] = np.arange(len(used))
         ns = faces.shape[1]
@@ -310,7 +306,7 @@ class DeformationTransfer:
             nearest = src[cKDTree(self.V_tgt_[src]).query(self.V_tgt_[dst])[1]]
             # each such part moves rigidly by the mean of what its vertices' nearest skin does:
             # copied vertex by vertex, a small part (a lash, a tooth) would be sheared and fold
-            part = mesh_parts(self.n_t_, self.F_tgt_)[dst]
+            part = self._part[dst]
             cnt = np.bincount(part)
             for j in range(k):
                 mean = np.stack([np.bincount(part, X[j, nearest, c]) for c in range(3)], axis=1)

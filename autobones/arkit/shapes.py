@@ -13,9 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AutobonesError
+from ..geometry.normals import triangle_normals
 from .names import ABSENT, ARKIT_NAMES
 
-
+# landmarks a set and a head must share: the correspondence's TPS needs a few non-coplanar points
+# (the robot shares 7 with ICT)
+MIN_LANDMARKS = 6
 NPZ, JSON = "ict_arkit.npz", "ict_arkit.json"  # the set's two files (the packaged set's names, kept for any set)
 
 
@@ -89,3 +92,11 @@ def _load(folder, stamp):
         raise AutobonesError(f"{folder}: the shape set lacks {', '.join(missing)}")
     landmarks = {k: np.asarray(v, dtype=np.float64) for k, v in meta["landmarks"].items()}
     return ShapeSet(V, F, landmarks, deltas, meta)
+
+
+def flipped_triangles(V, F, deltas):
+    """Triangles whose normal turns over (dot < 0) between ``V`` (n, 3) and ``V + D`` for each
+    displacement ``D`` (n, 3) of ``deltas`` (dict name -> D): dict name -> count. The rest normals
+    are computed once for all shapes."""
+    rest = triangle_normals(V, F)
+    return {n: int((np.einsum("ij,ij->i", rest, triangle_normals(V + D, F)) < 0).sum()) for n, D in deltas.items()}

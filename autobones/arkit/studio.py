@@ -28,15 +28,13 @@ import os
 import numpy as np
 
 from ..errors import AutobonesError
-from ..geometry.normals import triangle_normals
 from ..geometry.topology import largest_part
 from .names import ARKIT_NAMES
-from .shapes import NPZ, JSON, ShapeSet
+from .shapes import JSON, MIN_LANDMARKS, NPZ, ShapeSet, flipped_triangles
 
 NEUTRAL = "neutral.obj"
 LANDMARK_FILES = ("neutral.landmarks.json", "neutral.pp", "neutral.pts")
 SUBFOLDER = "arkit"  # inside a rig folder
-MIN_LANDMARKS = 6    # as arkit_targets needs (the TPS of the correspondence)
 MOVES = 1e-7         # of the neutral's bounding-box diagonal: below it a vertex is stored as not moving
 
 
@@ -93,15 +91,11 @@ def read_studio_shapes(folder):
         "names": list(ARKIT_NAMES), "absent": [n for n in ARKIT_NAMES if n not in deltas],
         "given": given, "skin_index_of": NEUTRAL,
         "storage": f"float32 displacements of vertices moving more than {MOVES:g} of the neutral's size",
-        "source_flipped_triangles": {n: _flipped(Vs, Fs, deltas[n]) for n in given},
+        "source_flipped_triangles": flipped_triangles(Vs, Fs, {n: deltas[n] for n in given}),
         "landmarks": {k: [float(x) for x in v] for k, v in landmarks.items()},
         "vertex_count": int(len(Vs)), "triangle_count": int(len(Fs)),
     }
     return ShapeSet(Vs, Fs, {k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()}, deltas, meta)
-
-
-def _flipped(V, F, D):
-    return int((np.einsum("ij,ij->i", triangle_normals(V, F), triangle_normals(V + D, F)) < 0).sum())
 
 
 def write_shape_set(shapes, rig_folder):

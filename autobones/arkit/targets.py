@@ -29,11 +29,10 @@ from ..geometry.topology import mesh_parts
 from .copy_baseline import copy_displacements, similarity
 from .deformation_transfer import DeformationTransfer
 from .names import ARKIT_NAMES, EYE_LOOK
-from .shapes import load_shapes
+from .shapes import MIN_LANDMARKS, flipped_triangles, load_shapes
 
 log = logging.getLogger(__name__)
 
-MIN_LANDMARKS = 6  # the TPS needs a few non-coplanar points; the robot shares 7 with ICT
 # eyeball turn at weight 1, degrees, in the head's canonical frame (+X subject's left, +Y up, +Z front)
 EYE_TURN_DEG = {"Up": 25.0, "Down": 30.0, "In": 30.0, "Out": 30.0}
 # the eye opening of a one-surface head: the landmarks' quadrilateral grown about its centre
@@ -110,11 +109,6 @@ def _in_polygon(X, poly):
             x_at = a[0] + (X[:, 1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
         inside ^= crosses & (X[:, 0] < x_at)
     return inside
-
-
-def flipped_triangles(V, F, D):
-    """Triangles whose normal turns over (dot < 0) between ``V`` and ``V + D``: a count."""
-    return int((np.einsum("ij,ij->i", triangle_normals(V, F), triangle_normals(V + D, F)) < 0).sum())
 
 
 def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_options):
@@ -214,7 +208,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
         "eyes": ("eyeLook* turn the separate eyeballs about " + ", ".join(sorted(eyes)) + " by "
                  + ", ".join(f"{k.lower()} {v:g} deg" for k, v in EYE_TURN_DEG.items())) if eyes else
                 "no separate eyeballs: eyeLook* move the lids and eye surface as the skin transfer gives",
-        "flipped_triangles": {n: flipped_triangles(V, F, targets[n]) for n in ARKIT_NAMES},
+        "flipped_triangles": flipped_triangles(V, F, {n: targets[n] for n in ARKIT_NAMES}),
         # the same count for the source's own shapes on its own skin: ICT folds some (mouthClose)
         "source_flipped_triangles": S.meta.get("source_flipped_triangles", {}),
         "max_displacement": {n: float(np.linalg.norm(targets[n], axis=1).max(initial=0.0)) for n in ARKIT_NAMES},

@@ -24,16 +24,3 @@ def export_format(out_path):
     raise AutobonesError(f"{os.fspath(out_path)}: cannot tell the format from {ext or 'no suffix'!r}; "
                          f"export writes {', '.join(USD_SUFFIXES + FBX_SUFFIXES)}")
 
-
-def export_rig(rig_path, out_path, **kwargs):
-    """Write the rig saved as ``rig_path`` (a glb written by autobones, sidecars beside it) to
-    ``out_path``, the format chosen by its suffix (:data:`USD_SUFFIXES`: :func:`.usd.write_usd`;
-    ``.fbx``: :func:`.fbx.write_fbx`). Returns the writer's result."""
-    fmt = export_format(out_path)
-    if fmt == "usd":
-        from .usd import write_usd
-
-        return write_usd(rig_path, out_path, **kwargs)
-    from .fbx import write_fbx
-
-    return write_fbx(rig_path, out_path, **kwargs)

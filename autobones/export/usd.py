@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..io.atomic import check_destination, refuse_overwriting_inputs, replace_all, temp_beside
+from . import USD_SUFFIXES
 from .source import read_rig_source
 
 INSTALL = "USD export needs usd-core: pip install 'autobones[usd]' (or pip install usd-core)"
@@ -397,11 +398,11 @@ def write_usd(rig_path, out_path, meters_per_unit=None):
     """
     rig_path, out_path = os.fspath(rig_path), os.fspath(out_path)
     ext = os.path.splitext(out_path)[1].lower()
-    if ext not in (".usd", ".usda", ".usdc", ".usdz"):
+    if ext not in USD_SUFFIXES:
         raise AutobonesError(f"{out_path}: a USD file ends in .usd, .usda, .usdc or .usdz, not {ext or 'nothing'!r}")
     refuse_overwriting_inputs([out_path], [rig_path])
     check_destination(out_path, "the USD file")
-    _, _, _, Usd, UsdGeom, UsdSkel, _ = _pxr()
+    UsdGeom = _pxr()[4]
     src = read_rig_source(rig_path)
     stage = build_stage(src, meters_per_unit)
     fd, tmp = temp_beside(out_path, suffix=ext)

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import AutobonesError
 from .gltf import read_accessor, read_glb
 from ..orient import Frame
-from ..rig import Rig, sidecar_attributes, sidecar_paths
+from ..rig import SIDECAR_FORMAT, Rig, sidecar_attributes, sidecar_paths
 from ..skeleton import Skeleton
 
 # sidecar keys the Rig rebuilds itself; every other key goes to its typed attributes (rig.sidecar_attributes)
@@ -135,18 +135,15 @@ def _read_sidecar(json_path):
     try:
         with open(json_path, encoding="utf-8") as fh:
             meta = json.load(fh)
-        if not isinstance(meta, dict) or meta.get("format") != "autobones-rig/1":
+        if not isinstance(meta, dict) or meta.get("format") != SIDECAR_FORMAT:
             raise ValueError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
-                             "expected 'autobones-rig/1'")
+                             f"expected {SIDECAR_FORMAT!r}")
         n = int(meta["vertex_count"])
         bones = meta["bones"]
         names = [str(b["name"]) for b in bones]
         skeleton = Skeleton(names, [names.index(b["parent"]) if b["parent"] is not None else -1 for b in bones],
                             [b["head"] for b in bones], [b["tail"] for b in bones])
-        fr = meta["frame"]
-        sym = fr.get("symmetry_error")  # null (or absent): undefined, e.g. a transferred rig's
-        frame = Frame(np.asarray(fr["rotation"], dtype=np.float64), np.asarray(fr["origin"], dtype=np.float64),
-                      float(fr["head_size"]), float("nan") if sym is None else float(sym))
+        frame = Frame.from_dict(meta["frame"])
         defs = (meta.get("expressions") or {}).get("definitions")
         if defs is not None:
             if not isinstance(defs, dict):

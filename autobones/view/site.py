@@ -20,9 +20,8 @@ import numpy as np
 from ..batch.report import REPORT_FORMAT, REPORT_NAME, STATUSES
 from ..errors import AutobonesError
 from ..io.rig_files import load_rig
-from ..rig import sidecar_paths
+from ..rig import SIDECAR_FORMAT, sidecar_paths
 
-SIDECAR_FORMAT = "autobones-rig/1"
 
 
 @dataclass

@@ -62,8 +62,7 @@ def thumbnail_png(glb_path, size=160):
         raise AutobonesError(f"{os.path.basename(glb_path)}: cannot read its mesh ({type(exc).__name__}: {exc})") from None
     fr = read_sidecar(glb_path).get("frame") or {}
     try:
-        frame = Frame(np.asarray(fr["rotation"], dtype=np.float64), np.asarray(fr["origin"], dtype=np.float64),
-                      float(fr["head_size"]))
+        frame = Frame.from_dict(fr)
         V = frame.to_canonical(P)  # the renderer's views are named in the canonical head frame
     except (KeyError, TypeError, ValueError):
         V = P - P.mean(axis=0) if len(P) else P
