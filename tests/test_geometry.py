@@ -1,6 +1,7 @@
 """autobones.geometry: the shared layer, one operation at a time, on tiny meshes and a real head."""
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from autobones.errors import AutobonesError
 from autobones.geometry import laplacian as lap
@@ -96,6 +97,24 @@ def test_factor_spd_uses_cholmod_when_it_is_installed_and_superlu_otherwise(ict)
     assert (lap._cholmod is not None) == ("cholmod" in type(getattr(solve, "__self__", solve)).__module__)
     x, x_lu = solve(b), lap.factor_spd(A, use_cholmod=False)(b)
     assert np.abs(x - x_lu).max() < 1e-10 * np.abs(x).max()
+
+
+def test_clipped_cotangent_laplacian_is_the_cotangent_one_where_no_weight_is_negative_and_an_m_matrix_everywhere(ict):
+    import igl
+
+    V, F = icosphere(2)                                     # acute triangles only: nothing to clip
+    L = lap.clipped_cotangent_laplacian(V, F)
+    assert np.abs((L + igl.cotmatrix(V, F)).toarray()).max() < 1e-12
+    V, F = ict                                              # a real head: obtuse and degenerate triangles
+    F = np.vstack([F, [[F[0, 0], F[0, 0], F[0, 1]]]])       # plus a zero-area one
+    L = lap.clipped_cotangent_laplacian(V, F)
+    off = (L - sp.diags(L.diagonal())).tocoo()
+    assert np.isfinite(L.data).all() and abs(L - L.T).max() < 1e-12
+    E = mesh_edges(F)
+    assert (off.data < 0).all() and off.nnz == 2 * (E[:, 0] != E[:, 1]).sum()   # every edge keeps a weight
+    assert np.abs(np.asarray(L.sum(axis=1))).max() < 1e-9 * L.diagonal().max()
+    C = -igl.cotmatrix(V, F[:-1]).tocoo()
+    assert (C.data[C.row != C.col] > 0).any()               # the plain one is no M-matrix on this head
 
 
 def test_diffusion_keeps_the_mass_weighted_total_and_smooths(ict):

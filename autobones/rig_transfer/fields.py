@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
-from ..geometry.laplacian import factor_spd, laplacian
+from ..geometry.laplacian import clipped_cotangent_laplacian, factor_spd
 from ..geometry.topology import weld
 
 
@@ -143,7 +143,8 @@ def inpaint(V, F, values, known):
     Fu = Fw[(~kw[Fw]).any(axis=1)]
     used = np.zeros(len(Vw), dtype=bool)
     used[Fu.ravel()] = True
-    L, _ = laplacian(Vw[used], np.cumsum(used)[Fu] - 1) if len(Fu) else (None, None)
+    # the clipped cotangent Laplacian: a fill needs an M-matrix, not the intrinsic rebuild's accuracy
+    L = clipped_cotangent_laplacian(Vw[used], np.cumsum(used)[Fu] - 1) if len(Fu) else None
     sub = np.flatnonzero(used)
     unknown = sub[~kw[sub]]
     if len(unknown) and L is not None:
@@ -156,9 +157,19 @@ def inpaint(V, F, values, known):
         # then give them the nearest known value below
         reach = _reaches_known(L, u, k)
         Luu = (Luu + sp.diags(np.where(reach, 0.0, 1.0))).tocsc()
-        rhs = -(Luk @ Xw[sub[kw[sub]]])
-        rhs[~reach] = 0.0
-        Xw[unknown] = factor_spd(Luu)(np.ascontiguousarray(rhs))
+        Xk = Xw[sub[kw[sub]]]
+        # a column constant on the known vertices around the gap fills with that constant: only the
+        # others need the solve (label columns absent there, and weights of bones far from it)
+        flat_col = (Xk == Xk[:1]).all(axis=0) if len(Xk) else np.ones(Xk.shape[1], dtype=bool)
+        fill = np.zeros((len(u), Xk.shape[1]))
+        if len(Xk):
+            fill[:] = Xk[0]
+        if (~flat_col).any():
+            rhs = -(Luk @ Xk[:, ~flat_col])
+            rhs[~reach] = 0.0
+            fill[:, ~flat_col] = factor_spd(Luu)(np.ascontiguousarray(rhs))
+        fill[~reach] = 0.0
+        Xw[unknown] = fill
         kw[unknown[reach]] = True
     if not kw.all():
         from scipy.spatial import cKDTree
