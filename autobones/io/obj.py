@@ -71,12 +71,23 @@ def _read_blocks(data):
     runs = [(int(kind[a]), data[starts[a]:ends[b]]) for a, b in zip(first, last) if kind[a]]
     if len(runs) > MAX_BLOCKS or any(k == 2 for k, _ in runs[:next(i for i, r in enumerate(runs) if r[0] == 1)]):
         raise _Unusual  # interleaved, or faces before the first vertex
-    verts = [np.loadtxt(io.BytesIO(block), usecols=(1, 2, 3), dtype=np.float64, ndmin=2, comments=None)
-             for k, block in runs if k == 1]
+    verts = [_vertex_block(block) for k, block in runs if k == 1]
     faces = [_face_block(block) for k, block in runs if k == 2]
     V = np.concatenate(verts)
     F = np.concatenate(faces) if faces else np.zeros((0, 3), dtype=np.int64)
     return V, F
+
+
+def _vertex_block(block):
+    """Vertices (k, 3) float64 of a run of ``v`` lines: one ``fromstring`` pass when every line has
+    exactly three numbers (twice as fast as ``loadtxt``), else ``loadtxt``'s first three columns."""
+    lines = block.count(b"\n") + 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a token it cannot parse ends the pass: the count shows it
+        vals = np.fromstring(block.replace(b"v", b" ").decode("ascii", "replace"), sep=" ", dtype=np.float64)
+    if len(vals) == 3 * lines:
+        return vals.reshape(lines, 3)
+    return np.loadtxt(io.BytesIO(block), usecols=(1, 2, 3), dtype=np.float64, ndmin=2, comments=None)
 
 
 def _face_block(block):
