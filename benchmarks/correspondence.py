@@ -76,7 +76,10 @@ vertex i, pooled per region of the neutral head: face (skin in front of the ears
 (skin at the sides beyond 85% of the head's half width, behind the eyes, between subnasale and brow
 height), scalp/back (the rest of the skin above the menton), neck (skin below the menton), inner (every
 other part: eyeballs, teeth, gums, lashes, mouth socket). Targets: mean <= 1.0 % and p95 <= 3 % on every
-region, expressive targets included.
+region, expressive targets included. The source's jaw prior (``jaw=`` of the fit, issue #13 item 3)
+is on: the neutral head's jaw weight and hinge are the built-in generic rig's, carried onto it by
+``autobones.transfer`` (:func:`ict_jaw_prior`); each line prints the jaw angle used and the raw
+estimate. ``--no-jaw-prior``: the fit without it.
 
 The accuracy targets (mean <= 1 %, p95 <= 3 %, 27 landmarks) are met, also on
 skin alone and on remeshed targets; the time (<= 1 s for 30k vertices) is
@@ -131,8 +134,18 @@ def ict_regions(V, F, lm):
     return out
 
 
-def families(quick):
-    """Identities x expressions x variants, errors per region (module doc, ``--families``)."""
+def ict_jaw_prior(Vn, F, lm_n):
+    """The jaw prior of the ICT neutral head (``jaw=`` of the fit): the built-in generic rig carried
+    onto it by ``autobones.transfer`` (its landmarks), the transferred jaw weight and hinge."""
+    import autobones
+    from autobones.rig_transfer.jaw_prior import jaw_prior
+
+    return jaw_prior(autobones.transfer((Vn, F), lm_n))
+
+
+def families(quick, jaw=True):
+    """Identities x expressions x variants, errors per region (module doc, ``--families``); ``jaw``:
+    the source's jaw prior (:func:`ict_jaw_prior`) on, else off."""
     import fast_simplification
     import trimesh
 
@@ -146,11 +159,12 @@ def families(quick):
     names = sorted(lm_n)
     _, lface, lbary, _ = closest_points(np.array([lm_n[n] for n in names]), Vn, F)
     region = ict_regions(Vn, F, lm_n)
+    prior = ict_jaw_prior(Vn, F, lm_n) if jaw else None
     ids = ["identity000", "identity010"] if quick else ["identity000", "identity005", "identity010", "identity015"]
     exprs = [None, "jawOpen", "mouthSmile_L"] if quick else [None, "jawOpen", "mouthSmile_L", "eyeBlink_L",
                                                                "mouthPucker", "browInnerUp_L"]
     variants = ("as is", "remeshed", "decimated 5k", "x1000")
-    print(f"# ICT families: source the neutral head (27 landmarks); {len(ids)} identities x {len(exprs)} expressions "
+    print(f"# ICT families: source the neutral head (27 landmarks), jaw prior {'on' if jaw else 'off'}; {len(ids)} identities x {len(exprs)} expressions "
           f"x {len(variants)} variants; regions (vertices): "
           + ", ".join(f"{r} {int((region == i).sum())}" for i, r in enumerate(REGIONS)))
     pooled = {(v, r): [] for v in variants for r in REGIONS}
@@ -174,8 +188,9 @@ def families(quick):
                 elif variant == "x1000":
                     scale, VT = 1000.0, 1000.0 * Vt
                 VT, FT = np.asarray(VT, dtype=np.float64), np.asarray(FT, dtype=np.int64)
-                t = time.perf_counter()
-                R = dense_correspondence(Vn, F, VT, FT, lm_n, {n: scale * p for n, p in lm_t.items()})[0]
+                t, info = time.perf_counter(), {}
+                R = dense_correspondence(Vn, F, VT, FT, lm_n, {n: scale * p for n, p in lm_t.items()}, jaw=prior,
+                                         details=info)[0]
                 dt = time.perf_counter() - t
                 e = 100 * np.linalg.norm(R / scale - Vt, axis=1) / exex
                 for i, r in enumerate(REGIONS):
@@ -184,7 +199,9 @@ def families(quick):
                         by_expr[(expr, r)].append(e[region == i])
                 print(f"  {ident} {expr or 'neutral':14s} {variant:13s} mean {e.mean():5.2f}%  "
                       + "  ".join(f"{r} {e[region == i].mean():.2f}/{np.percentile(e[region == i], 95):.2f}"
-                                  for i, r in enumerate(REGIONS)) + f"  ({dt:.1f} s)", flush=True)
+                                  for i, r in enumerate(REGIONS))
+                      + (f"  jaw {info['jaw_deg']:.1f} deg ({info['jaw']['raw']:.2f})" if jaw else "")
+                      + f"  ({dt:.1f} s)", flush=True)
 
     def table(rows, key_name):
         print(f"\n| {key_name} | " + " | ".join(f"{r} mean / p95 %" for r in REGIONS) + " |")
@@ -207,9 +224,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="two pairs only")
     ap.add_argument("--remeshed", action="store_true", help="also score targets remeshed to another vertex layout")
     ap.add_argument("--families", action="store_true", help="identities x expressions x variants, per region")
+    ap.add_argument("--no-jaw-prior", action="store_true",
+                    help="--families: fit without the source's jaw prior (the fit before issue #13's jaw prior)")
     args = ap.parse_args(argv)
     if args.families:
-        return families(args.quick)
+        return families(args.quick, jaw=not args.no_jaw_prior)
     mesh = {h: load_mesh(DATA / "ict" / f"{h}.obj") for h in HEADS}
     lms = {h: json.loads((DATA / "ict" / f"{h}.landmarks.json").read_text())["landmarks"] for h in HEADS}
     F = mesh[HEADS[0]][1]

@@ -74,6 +74,12 @@ with ``scipy.sparse.linalg.splu`` (symmetric mode, minimum-degree ordering of
 ``A + A^T``: less fill than COLAMD). A final exact stick
 (:func:`autobones.rig_transfer.stick.stick`) puts every vertex on the target surface.
 
+An open jaw (``jaw=``, :mod:`autobones.rig_transfer.jaw_prior`): a jaw turned about its joint is
+far from a smooth warp, so with the source rig's jaw given, the source skin's jaw is first opened as
+far as the landmarks say and the posed skin is what the TPS warps and the shape term keeps (the
+result is still one point per source vertex). Closed-mouth targets (estimate within 3 degrees of
+rest) are fitted exactly as without it.
+
 Multi-part meshes (ICT: skin, eyeballs, teeth, gums, mouth socket, ... 56
 parts): the parts are the connected components of each mesh. After the TPS
 warp every source part votes, by the target part of its vertices' nearest
@@ -100,6 +106,7 @@ from ..geometry.rotations import axis_turn, rotate_between
 from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
 from ..geometry.validate import mesh_arrays
 from ..geometry.tps import ThinPlateSpline, as_points, landmark_arrays
+from .jaw_prior import check_prior, estimate_jaw_angle, open_jaw
 from .stick import stick
 
 log = logging.getLogger(__name__)
@@ -353,7 +360,7 @@ class _Matcher:
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
                 landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="blend", symmetric_weight=10.0, coarse_vertices=8000,
-                fine_stages=(3.0,), fine_iterations=2, timings=None):
+                fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
     Parameters
@@ -398,8 +405,16 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         ``stages`` and ``iterations`` of the full-resolution solve after the
         coarse one.
     timings : dict, optional
-        Filled with seconds per step: ``tps``, ``setup``, ``fit`` (setup and
-        fit summed over the coarse and fine solves).
+        Filled with seconds per step: ``tps`` (with ``jaw``: the jaw's estimate and pose
+        included), ``setup``, ``fit`` (setup and fit summed over the coarse and fine solves).
+    jaw : dict, optional
+        The source's jaw (:func:`autobones.rig_transfer.jaw_prior.jaw_prior`: ``weight`` (n,),
+        ``pivot`` (3,), ``axis`` (3,), source frame): the source skin's jaw is first opened as far
+        as the landmarks say (:func:`~autobones.rig_transfer.jaw_prior.estimate_jaw_angle`), and
+        that posed skin is what the TPS warps and the shape term keeps. None: no prior.
+    details : dict, optional
+        Filled with ``jaw_deg`` (float, the jaw opening used; 0 without ``jaw``) and ``jaw``
+        (the estimate's details) when ``jaw`` is given.
 
     Returns
     -------
@@ -424,6 +439,10 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
     if edge_reference not in ("source", "tps", "blend"):
         raise AutobonesError(f"edge_reference must be 'blend', 'source' or 'tps', got {edge_reference!r}")
+    if jaw is not None:
+        V_src, P = _open_source_jaw(V_src, F_src, P, Q, jaw, details)
+    elif details is not None:
+        details["jaw_deg"] = 0.0
     tps = ThinPlateSpline().fit(P, Q)
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight, {})
@@ -433,6 +452,24 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         timings.update(tps=t1 - t0, setup=t_setup, fit=t_fit)
     log.debug("fit_surface: tps %.3fs setup %.3fs fit %.3fs", t1 - t0, t_setup, t_fit)
     return X, labels
+
+
+def _open_source_jaw(V_src, F_src, P, Q, jaw, details):
+    """The source skin ``V_src`` (n, 3) and its landmarks ``P`` (k, 3) with the jaw opened to the
+    target landmarks ``Q`` (k, 3) (:mod:`.jaw_prior`); each landmark moves with its closest point of
+    the skin. Unchanged arrays when the estimate is 0."""
+    w, pivot, axis = check_prior(jaw, len(V_src))
+    _, lface, lbary, _ = closest_points(P, V_src, F_src)
+    on_skin = np.einsum("ij,ijk->ik", lbary, V_src[F_src[lface]])
+    info = {}
+    angle = estimate_jaw_angle(P, Q, np.einsum("ij,ij->i", lbary, w[F_src[lface]]), pivot, axis, details=info)
+    if details is not None:
+        details.update(jaw_deg=angle, jaw=info)
+    log.debug("fit_surface: jaw opened %.1f degrees (estimate %.2f)", angle, info["raw"])
+    if angle == 0.0:
+        return V_src, P
+    V_src = open_jaw(V_src, w, pivot, axis, angle)
+    return V_src, P + np.einsum("ij,ijk->ik", lbary, V_src[F_src[lface]]) - on_skin
 
 
 def _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices, schedule, fine_schedule, args):

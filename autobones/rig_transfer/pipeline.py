@@ -28,6 +28,7 @@ import os
 import numpy as np
 
 from .correspondence import dense_correspondence
+from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
 from .fields import transfer_fields
@@ -102,6 +103,30 @@ def generic_detected_landmarks(generic, rig=None):
     return detect_generic_landmarks(generic)
 
 
+@functools.lru_cache(maxsize=4)
+def _jaw_prior_in_folder(folder, mesh_mtime_ns):
+    # as _detect_in_folder: a pure function of the folder's files, read-only for its callers
+    from ..labelled_rig import LabelledRig
+
+    return jaw_prior(LabelledRig.load(folder))
+
+
+def generic_jaw_prior(generic, rig=None):
+    """The articulated jaw prior (:func:`autobones.rig_transfer.jaw_prior.jaw_prior`) of the generic rig
+    ``rig`` names (loaded as ``generic``), or None when it has no ``jaw`` and ``head`` bones.
+
+    Memoised per rig folder and ``mesh.obj`` time stamp like :func:`generic_detected_landmarks`.
+    """
+    if not {"jaw", "head"} <= set(generic.skeleton.names):
+        return None
+    if rig is None or isinstance(rig, (str, os.PathLike)):
+        from ..generic_rig import default_rig_path
+
+        folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
+        return _jaw_prior_in_folder(folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
+    return jaw_prior(generic)
+
+
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
              **fit_options):
     """Carry the generic rig onto a landmarked head.
@@ -128,6 +153,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     arkit : bool
         Also make the 52 ARKit shapes on this head (:func:`autobones.arkit.targets.arkit_targets`):
         ``rig.arkit_targets`` and the ``rig.arkit`` record; ``save`` writes them as morph targets.
+    **fit_options
+        Options of :func:`autobones.rig_transfer.correspondence.fit_surface`; ``jaw`` defaults to the
+        generic rig's articulated jaw prior (:func:`generic_jaw_prior`; ``jaw=None`` fits without it).
 
     Returns
     -------
@@ -153,8 +181,13 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         lap("generic_landmarks")
     dst = {n: lm[n] for n in shared}
     fit_timings = {}
+    if "jaw" not in fit_options:
+        # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
+        # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
+        fit_options["jaw"] = generic_jaw_prior(generic, rig)
+    fit_details = {}
     P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
-                                       **fit_options)
+                                       details=fit_details, **fit_options)
     timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
     if details is not None:
         details.update(correspondence=P, reliable=ok)
@@ -177,7 +210,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",
-               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"}
+               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object",
+               "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3)}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
