@@ -5,6 +5,8 @@ Run by hand, not by the tests::
     python benchmarks/arkit.py                       # 4 identities (~3 min on 2 cores)
     python benchmarks/arkit.py --identities 3 7      # these ICT identities
     python benchmarks/arkit.py --no-remesh           # keep ICT's triangulation (an easier case)
+    python benchmarks/arkit.py --one-surface         # skin only, taken as a one-surface scan (lids closed by
+                                                     # autobones.arkit.lids, as transfer --arkit does on scans)
 
 Heads: ICT-FaceKit identities (``../shared/data/ict/ict_facekit_shapes.npz``; the shape set's
 base is ICT's neutral head, which no identity is), each **remeshed** (one Loop subdivision,
@@ -25,6 +27,11 @@ Score per shape: explained fraction ``1 - ||error|| / ||true displacement||`` ov
 correspondence of the packaged ICT skin onto the head. Mean and worst over the 51 shapes ICT
 has (``tongueOut`` is absent). Time: the correspondence, then the deformation transfer of
 all shapes (mapping, one factorisation, the solve); 2 cores shared with other work.
+
+Lids: per head and side, the fraction of the lid gap ``eyeBlinkLeft`` / ``eyeBlinkRight`` close
+(:func:`autobones.arkit.lids.gap_closure`: between the skin vertices nearest the palpebrale
+landmarks, between the landmarks' own points, and the latter's vertical part), for the truth,
+deformation transfer and the copy.
 """
 from __future__ import annotations
 
@@ -40,12 +47,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from autobones.arkit.copy_baseline import copy_displacements, similarity  # noqa: E402
-from autobones.arkit.deformation_transfer import DeformationTransfer  # noqa: E402
+from autobones.arkit.lids import eye_sides, gap_closure  # noqa: E402
 from autobones.arkit.names import ict_names  # noqa: E402
 from autobones.arkit.shapes import load_shapes  # noqa: E402
+from autobones.arkit.targets import deformation_targets  # noqa: E402
 from autobones.geometry.closest import closest_points  # noqa: E402
 from autobones.geometry.topology import mesh_parts  # noqa: E402
 from autobones.io.obj import read_obj  # noqa: E402
+from autobones.orient import frame_from_landmarks  # noqa: E402
 from autobones.rig_transfer.correspondence import dense_correspondence  # noqa: E402
 
 ICT = os.path.join(ROOT, "..", "shared", "data", "ict")
@@ -75,7 +84,7 @@ def score(X, T, mask):
     return 1.0 - np.linalg.norm(X[mask] - T[mask]) / max(np.linalg.norm(T[mask]), 1e-300)
 
 
-def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True):
+def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surface=False, close_lids=True):
     Vi = neutral + z[f"identity/identity{k:03d}"].astype(np.float64)
     # landmarks: ICT's neutral landmarks at their barycentric place on the identity
     lf, lb = carry(np.array(list(lm_neutral.values())), neutral, F, part)
@@ -84,6 +93,12 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True):
         Vt, Ft = remesh(Vi, F)
     else:
         Vt, Ft = Vi, F
+    if one_surface:  # the skin alone, no eyeballs, teeth or socket: as a scan would be
+        tpart = mesh_parts(len(Vt), Ft)
+        keep = tpart == np.argmax(np.bincount(tpart))
+        remap = -np.ones(len(Vt), dtype=np.int64)
+        remap[keep] = np.arange(keep.sum())
+        Vt, Ft = Vt[keep], remap[Ft[keep[Ft[:, 0]]]]
     tpart = mesh_parts(len(Vt), Ft)
     tskin = tpart == np.argmax(np.bincount(tpart))
     # each target vertex's place on the identity, in the part its remeshed part came from (the part
@@ -104,9 +119,9 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True):
     P = dense_correspondence(S.vertices, S.faces, Vt, Ft, S.landmarks, lm_t)[0]
     t_corr = time.perf_counter() - t0
     t0 = time.perf_counter()
-    moving = np.linalg.norm(D, axis=2).max(axis=0) > 0
-    dt = DeformationTransfer().fit(S.vertices, S.faces, P, Vt, Ft, moving=moving)
-    X = dt.transform(D)
+    timings = {}
+    frame = frame_from_landmarks(Vt, Ft, lm_t) if one_surface else None
+    X = deformation_targets(S, D, P, Vt, Ft, lm_t, frame, timings=timings, close_lids=close_lids)
     t_dt = time.perf_counter() - t0
     shared = [n for n in S.landmarks if n in lm_t]
     s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm_t[n] for n in shared]))
@@ -114,14 +129,22 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True):
     every = np.ones(len(Vt), dtype=bool)
     rows = {n: (score(X[j], T[j], tskin), score(C[j], T[j], tskin), score(X[j], T[j], every), score(C[j], T[j], every))
             for j, n in enumerate(names)}
+    up = frame_from_landmarks(Vt, Ft, lm_t).rotation[1]
+    lids = {}
+    for side in eye_sides(lm_t):
+        j = names.index("eyeBlinkLeft" if side == "l" else "eyeBlinkRight")
+        lids[side] = {m: gap_closure(Vt, Ft, A[j], lm_t, side, up) for m, A in (("truth", T), ("DT", X), ("copy", C))}
     return {"identity": k, "vertices": len(Vt), "triangles": len(Ft), "correspond_s": t_corr, "transfer_s": t_dt,
-            "dt_timings": dt.timings_, "rows": rows}
+            "dt_timings": timings, "rows": rows, "lids": lids}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--identities", type=int, nargs="+", default=[3, 7, 11, 15])
     ap.add_argument("--no-remesh", action="store_true")
+    ap.add_argument("--one-surface", action="store_true",
+                    help="keep only each head's skin and take it as a one-surface scan (eye surface free, lids closed)")
+    ap.add_argument("--no-lids", action="store_true", help="with --one-surface: only set the eye surface free")
     ap.add_argument("--json", help="also write the numbers here")
     args = ap.parse_args(argv)
     S = load_shapes()
@@ -132,7 +155,8 @@ def main(argv=None):
     z = dict(np.load(os.path.join(ICT, "ict_facekit_shapes.npz")))
     results = []
     for k in args.identities:
-        r = run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=not args.no_remesh)
+        r = run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=not args.no_remesh,
+                         one_surface=args.one_surface, close_lids=not args.no_lids)
         results.append(r)
         A = np.array(list(r["rows"].values()))
         print(f"identity{k:03d}: {r['vertices']} vertices, {r['triangles']} triangles; correspondence "
@@ -154,6 +178,16 @@ def main(argv=None):
     print("| mean | " + " | ".join(f"{M[:, :, c].mean():.1%}" for c in range(4)) + " |")
     print("| worst shape (mean over identities) | " + " | ".join(f"{per[:, c].min():.1%}" for c in range(4)) + " |")
     print("| worst shape on any identity | " + " | ".join(f"{M[:, :, c].min():.1%}" for c in range(4)) + " |")
+    print()
+    print("Lid gap closed by eyeBlinkLeft / eyeBlinkRight (nearest vertices / landmark points / vertical):")
+    print()
+    print("| head | side | truth | DT | copy |")
+    print("|---|---|---|---|---|")
+    for r in results:
+        for side, c in r["lids"].items():
+            print(f"| identity{r['identity']:03d} | {side} | " + " | ".join(
+                " / ".join(f"{c[m][w]:.0%}" for w in ("vertices", "points", "vertical")) for m in ("truth", "DT", "copy"))
+                + " |")
     ts = [r["transfer_s"] for r in results]
     print(f"\ntime, all {len(names)} shapes by deformation transfer: median {np.median(ts):.1f} s "
           f"(min {min(ts):.1f}, max {max(ts):.1f}) on ~{results[0]['vertices']}-vertex heads; "

@@ -33,6 +33,9 @@ source has no counterpart of) take no gradient (``Q = I``): the solve fills them
 borders. A scan's eye surface between the lids (``free`` in :meth:`DeformationTransfer.fit`)
 takes no gradient and almost no weight (``hole_weight``) either: it squashes to follow the lids,
 so the upper lid can come down to the lower one in a blink instead of being held apart by it.
+Vertices ``pinned`` in ``fit`` may be given displacements in ``transform`` (``pins``): soft
+positional terms ``pin_weight * ||d_i - g_i||^2`` in a second factorisation, for the eye opening
+of a scan whose lids the gradients alone leave apart (:mod:`autobones.arkit.lids`).
 """
 from __future__ import annotations
 
@@ -148,8 +151,9 @@ class DeformationTransfer:
     """
 
     def __init__(self, anchor_weight=1e3, screening=1e-6, max_distance=1.0, min_part_coverage=0.25, samples=4,
-                 turn="smooth", smooth_iterations=10, hole_weight=1e-3):
+                 turn="smooth", smooth_iterations=10, hole_weight=1e-3, pin_weight=100.0):
         self.samples = samples
+        self.pin_weight = pin_weight
         self.turn = turn
         self.smooth_iterations = smooth_iterations
         self.hole_weight = hole_weight
@@ -158,7 +162,7 @@ class DeformationTransfer:
         self.max_distance = max_distance
         self.min_part_coverage = min_part_coverage
 
-    def fit(self, V_src, F_src, P, V_tgt, F_tgt, moving=None, free=None):
+    def fit(self, V_src, F_src, P, V_tgt, F_tgt, moving=None, free=None, pinned=None):
         """Map target triangles to source triangles and factor the target's system.
 
         Parameters
@@ -176,6 +180,11 @@ class DeformationTransfer:
         free : (m_t,) bool, optional
             Target triangles to treat as over a hole of the source even where it covers them
             (a scan's eye surface between the lids: :func:`autobones.arkit.targets.eye_fissures`).
+        pinned : (p,) int, optional
+            Target vertices whose displacements :meth:`transform` may be given (``pins``): soft
+            positional constraints weighted ``pin_weight`` times the Laplacian's mean diagonal,
+            in a second factorisation (a scan's eye opening:
+            :class:`autobones.arkit.lids.LidClosure`).
         """
         t0 = time.perf_counter()
         V_src, P, V_tgt = (np.asarray(a, dtype=np.float64) for a in (V_src, P, V_tgt))
@@ -246,7 +255,7 @@ class DeformationTransfer:
         weight = np.ones(m_t) if free is None else np.where(free, self.hole_weight, 1.0)
         A3 = sp.diags(np.repeat(area * weight, 3))
         L = (G.T @ A3 @ G).tocsc()
-        scale = float(L.diagonal().mean())
+        scale = self._scale = float(L.diagonal().mean())
         mass = np.bincount(F_tgt.ravel(), np.repeat(area / 3.0, 3), minlength=n_t)
         diag = self.anchor_weight * scale * anchored + self.screening * scale * mass / max(mass.mean(), 1e-300)
         # right-hand sides from the used source triangles' gradients: G^T A S, S picking each covered
@@ -262,11 +271,17 @@ class DeformationTransfer:
         self.timings_ = {"map": time.perf_counter() - t0}
         t1 = time.perf_counter()
         self._solve = factor_spd(L + sp.diags(diag))
+        self._pinned = self._solve_pinned = None
+        if pinned is not None and len(pinned):
+            self._pinned = np.asarray(pinned, dtype=np.int64)
+            pin = np.zeros(n_t)
+            pin[self._pinned] = self.pin_weight * scale
+            self._pinned_system = L + sp.diags(diag + pin)  # factorised when first used
         self.timings_["factor"] = time.perf_counter() - t1
         self.n_t_, self.F_tgt_, self.V_tgt_ = n_t, F_tgt, V_tgt
         return self
 
-    def transform(self, deltas, inherit=True, keep=None):
+    def transform(self, deltas, inherit=True, keep=None, pins=None):
         """Target displacements of the source shapes.
 
         Parameters
@@ -279,6 +294,8 @@ class DeformationTransfer:
             teeth follow the lips and the jaw); False leaves them at the solve's 0.
         keep : (n_t,) bool, optional
             Vertices held at 0 whatever (eyeballs: they turn by their bones, not by the skin).
+        pins : (k, p, 3) float, optional
+            Displacements asked of the ``pinned`` vertices of :meth:`fit`, per shape (target units).
 
         Returns
         -------
@@ -297,7 +314,18 @@ class DeformationTransfer:
             J -= np.eye(3)
             # G's row 3t + c is d/dx_c, so shape j's column of coordinate i wants J[j, i, c]
             rhs = self._B @ np.transpose(J, (1, 3, 0, 2)).reshape(3 * len(used), 3 * k)
-        X = np.asarray(self._solve(rhs)).reshape(self.n_t_, k, 3).transpose(1, 0, 2)
+        solve = self._solve
+        if pins is not None:
+            if self._pinned is None:
+                raise AutobonesError("deformation transfer: pins given but no vertices were pinned in fit")
+            g = np.asarray(pins, dtype=np.float64)  # (k, p, 3) -> rows of the pinned, columns j * 3 + c
+            rhs[self._pinned] += self.pin_weight * self._scale * np.transpose(g, (1, 0, 2)).reshape(len(self._pinned), 3 * k)
+            if self._solve_pinned is None:
+                t1 = time.perf_counter()
+                self._solve_pinned = factor_spd(self._pinned_system)
+                self.timings_["factor_pinned"] = time.perf_counter() - t1
+            solve = self._solve_pinned
+        X = np.asarray(solve(rhs)).reshape(self.n_t_, k, 3).transpose(1, 0, 2)
         if inherit and not self.covered_parts_.all() and self.covered_parts_.any():
             from scipy.spatial import cKDTree
 

@@ -11,9 +11,11 @@ eyeLook* shapes turn them rigidly about their eye bone by :data:`EYE_TURN_DEG` (
 eyeLook shapes move the lids and eye shells, not its eyeballs, which ICT turns by joints; the
 angles are chosen, not measured). On a one-surface scan the eye surface between the lids is
 one with them: its triangles (:func:`eye_fissures`) are set free in the solve so the lids can
-close over it (held rigid, it kept them apart: the james scan's blink closed 1 % and 24 % of the
-lid gaps; free, 37 % and 67 %; ICT's own blink 77 %), and the eyeLook* shapes move the lids and
-that surface as the skin transfer gives, with no turn.
+close over it (held rigid, it kept them apart), and where the gradients still leave the lids
+apart (james's left eye: its blink closed 33 % of the gap vertically, ICT's own 82 %) the
+shapes that move the lids are solved again with the opening's vertices placed where the
+source's lids go (:mod:`.lids`: 79 %); the eyeLook* shapes move the lids and that surface as
+the skin transfer gives, with no turn.
 ``tongueOut`` (ICT has none) is an all-zero target, recorded as absent.
 """
 from __future__ import annotations
@@ -28,6 +30,7 @@ from ..geometry.normals import triangle_normals
 from ..geometry.topology import mesh_parts
 from .copy_baseline import copy_displacements, similarity
 from .deformation_transfer import DeformationTransfer
+from .lids import LidClosure, eye_sides, margin_points
 from .names import ARKIT_NAMES, EYE_LOOK
 from .shapes import MIN_LANDMARKS, flipped_triangles, load_shapes
 
@@ -75,27 +78,27 @@ def eyeball_vertices(rig):
     return out
 
 
-def eye_fissures(V, F, landmarks, frame):
+def eye_fissures(V, F, landmarks, frame, growth=None):
     """Triangles of a one-surface head inside each eye's opening: (m,) bool.
 
-    The opening is the quadrilateral of the four eye landmarks (``exocanthion``,
-    ``palpebrale_superius``, ``endocanthion``, ``palpebrale_inferius``) seen from the front in the
-    head's canonical frame; a triangle is in it when its centroid is, its normal faces forward and
-    it lies within a fissure length of the landmarks in depth. On a scan the eye surface there is
-    one with the lids: held rigid it would keep the lids apart in a blink.
+    The opening is the outline of the two lid margins (:func:`autobones.arkit.lids.margin_points`,
+    the curves through ``endocanthion``, ``palpebrale_superius|inferius`` and ``exocanthion``)
+    seen from the front in the head's canonical frame, grown by ``growth`` about its centre
+    (None: :data:`FISSURE_GROWTH`); a triangle is in it when its centroid is, its normal faces
+    forward and it lies within a fissure length of the landmarks in depth. On a scan the eye
+    surface there is one with the lids: held rigid it would keep the lids apart in a blink.
     """
+    growth = FISSURE_GROWTH if growth is None else growth
     C = frame.to_canonical(np.asarray(V, dtype=np.float64)[F].mean(axis=1))
     n = triangle_normals(V, F) @ np.asarray(frame.rotation, dtype=np.float64).T
     out = np.zeros(len(F), dtype=bool)
-    for side in ("l", "r"):
-        names = [f"exocanthion_{side}", f"palpebrale_superius_{side}", f"endocanthion_{side}",
-                 f"palpebrale_inferius_{side}"]
-        if not all(k in landmarks for k in names):
-            continue
-        Q = frame.to_canonical(np.array([landmarks[k] for k in names], dtype=np.float64))
-        fissure = np.linalg.norm(Q[0] - Q[2])
+    for side in eye_sides(landmarks):
+        ends = [np.asarray(landmarks[f"{k}_{side}"], dtype=np.float64) for k in ("endocanthion", "exocanthion")]
+        up, lo = margin_points(landmarks, side, np.linspace(0.0, 1.0, 18)[1:-1])
+        Q = frame.to_canonical(np.vstack([ends[0], up, ends[1], lo[::-1]]))
+        fissure = np.linalg.norm(ends[1] - ends[0]) / frame.size
         mid = Q[:, :2].mean(axis=0)
-        inside = _in_polygon(C[:, :2], mid + FISSURE_GROWTH * (Q[:, :2] - mid))
+        inside = _in_polygon(C[:, :2], mid + growth * (Q[:, :2] - mid))
         out |= inside & (n[:, 2] > 0.3) & (np.abs(C[:, 2] - Q[:, 2].mean()) < fissure)
     return out
 
@@ -111,6 +114,65 @@ def _in_polygon(X, poly):
     return inside
 
 
+def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, keep=None, timings=None,
+                        close_lids=True):
+    """Deformation transfer of a shape set onto a head, lids closed as the source's on a one-surface head.
+
+    Parameters
+    ----------
+    shapes : ShapeSet
+        The source (:func:`load_shapes`); ``deltas`` (k, n_s, 3) its displacements to carry.
+    P : (n_s, 3) float
+        Each source vertex's point on the head (the dense correspondence), head frame and units.
+    V : (n, 3) float, F : (m, 3) int
+        The head, input frame and units.
+    landmarks : dict str -> (3,)
+        The head's landmarks (the eye's four name its lid margins).
+    one_surface : Frame or None
+        The head's frame when its lids and visible eye are one surface (no separate eyeballs):
+        then the eye surface between the lids is set free (:func:`eye_fissures`) and the shapes
+        that open or close the eyes are solved again with the opening's vertices placed where the
+        source's lids go (:class:`autobones.arkit.lids.LidClosure`). None: a head with eyeballs.
+    keep : (n,) bool, optional
+        Vertices held at 0 (separate eyeballs).
+    timings : dict, optional
+        Filled with seconds: ``map``, ``factor``, ``solve``, ``lids``.
+    close_lids : bool
+        False: on a one-surface head only set the eye surface free (for comparison).
+
+    Returns
+    -------
+    (k, n, 3) float64
+        Displacements, input frame and units.
+    """
+    S, D = shapes, np.asarray(deltas, dtype=np.float64)
+    moving = np.linalg.norm(D, axis=2).max(axis=0) > 0
+    free = lids = None
+    if one_surface is not None:
+        # the scan's eye surface between the lids takes no gradient
+        free = eye_fissures(V, F, landmarks, one_surface)
+        if close_lids:
+            lids = LidClosure().fit(S.vertices, S.faces, S.landmarks, V, F, landmarks)
+    pinned = None if lids is None else lids.vertices_
+    dt = DeformationTransfer().fit(S.vertices, S.faces, P, V, F, moving=moving, free=free, pinned=pinned)
+    X = dt.transform(D, keep=keep)
+    tim = dict(dt.timings_)
+    if lids is not None and len(lids.vertices_):
+        # the gradients alone keep a one-surface scan's lids apart: where they do (not on a head
+        # whose lids are modelled), the shapes that open or close the eyes are solved again, the
+        # opening's vertices placed where the source's lids go (the upper margin down to the lower
+        # one in a blink) and the lower lid where the gradients put it
+        t = time.perf_counter()
+        need = lids.needed(D, X)
+        sel = np.flatnonzero(lids.moving_shapes(D)) if need.any() else []
+        if len(sel):
+            X[sel] = dt.transform(D[sel], keep=keep, pins=lids.targets(D[sel], X[sel], need))
+        tim["lids"] = time.perf_counter() - t
+    if timings is not None:
+        timings.update(tim)
+    return X
+
+
 def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_options):
     """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
 
@@ -124,7 +186,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     method : "deformation" or "copy"
         Deformation transfer, or the copy baseline (:mod:`.copy_baseline`; for comparison).
     timings : dict, optional
-        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``eyes``.
+        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``lids`` (one-surface heads), ``eyes``.
     **fit_options
         Passed to :func:`dense_correspondence`.
 
@@ -163,12 +225,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     for m in eyes.values():
         keep |= m
     if method == "deformation":
-        moving = np.linalg.norm(D, axis=2).max(axis=0) > 0
-        # a scan's eye surface between the lids takes no gradient (no separate eyeballs there)
-        free = None if eyes else eye_fissures(V, F, lm, rig.frame)
-        dt = DeformationTransfer().fit(S.vertices, S.faces, P, V, F, moving=moving, free=free)
-        X = dt.transform(D, keep=keep)
-        tim.update(dt.timings_)
+        X = deformation_targets(S, D, P, V, F, lm, None if eyes else rig.frame, keep=keep, timings=tim)
     elif method == "copy":
         s, R = similarity(np.array([src[n] for n in shared]), np.array([dst[n] for n in shared]))
         X = copy_displacements(S.faces, D, P, V, s, R)
