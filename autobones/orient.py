@@ -33,6 +33,8 @@ extent of the mesh in the canonical axes), so canonical heads measure about 1.
 """
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -205,7 +207,10 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         elif winner is not None:
             candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
     if len(candidates) > 1:
-        scores = [_overlay_score(P, u, f, ref) for u, f in candidates]
+        # independent ICPs whose time is in the k-d tree queries, which release the GIL: threads
+        # give the same scores in about half the time on two cores
+        with ThreadPoolExecutor(max_workers=min(len(candidates), os.cpu_count() or 1)) as pool:
+            scores = list(pool.map(lambda c: _overlay_score(P, c[0], c[1], ref), candidates))
         up_d, front_d = candidates[int(np.argmin(scores))]
     else:
         up_d, front_d = candidates[0]
