@@ -259,7 +259,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="3 heads, 4 orientations, 2 transfer pairs")
     ap.add_argument("--dlib", action="store_true", help="also dlib's 68-point predictor (needs dlib-bin and "
                                                         "face-recognition-models)")
-    ap.add_argument("--size", type=int, default=512, help="picture size of the detector (default 512)")
+    ap.add_argument("--size", type=int, default=384, help="picture size of the detector (default 384, as LandmarkDetector)")
     args = ap.parse_args(argv)
     wall0 = time.perf_counter()
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
