@@ -74,6 +74,11 @@ with ``scipy.sparse.linalg.splu`` (symmetric mode, minimum-degree ordering of
 ``A + A^T``: less fill than COLAMD). A final exact stick
 (:func:`autobones.rig_transfer.stick.stick`) puts every vertex on the target surface.
 
+A target much denser than the source (a scan) is matched back through grid cells of half the
+source's median edge (:data:`SAMPLE_RATIO`): each cell's area-weighted centroid stands for its
+vertices, so the reverse term costs what the source's resolution needs (ICT identity000 midpoint-
+subdivided twice, 420k vertices: 13.5 -> 11.3 s, error 0.45/1.12 -> 0.44/1.16 % ex-ex).
+
 An open jaw (``jaw=``, :mod:`autobones.rig_transfer.jaw_prior`): a jaw turned about its joint is
 far from a smooth warp, so with the source rig's jaw given, the source skin's jaw is first opened as
 far as the landmarks say and the posed skin is what the TPS warps and the shape term keeps (the
@@ -139,25 +144,50 @@ class _PartTrees:
         return out
 
 
-def _reverse_matches(X, N, labels, sidx, V_tgt, N_tgt, tgt_part, tq, area_t, big, cos_max):
-    """Target -> source matches: every target vertex ``tq`` goes to its nearest source vertex ``sidx``.
+def _reverse_matches(X, N, labels, sidx, T, N_t, part_t, area_t, big, cos_max):
+    """Target -> source matches: every target sample ``T`` (k, 3) (normals ``N_t``, parts ``part_t``,
+    areas ``area_t``: :func:`_target_samples`) goes to its nearest source vertex ``sidx``.
 
     Same part only (part label times ``big`` as a fourth coordinate), dropped
     when the normals differ by more than ``acos(cos_max)`` or the distance is
     an outlier (> 5 x median). Returns ``has`` (n,) bool, a source vertex
     received matches; ``M`` (n, 3) the area-weighted mean of its
-    matched target vertices (the centroid of the target surface closest to
+    matched target samples (the centroid of the target surface closest to
     it); ``a`` (n,) the target area it received.
     """
-    d, i = cKDTree(np.c_[X[sidx], big * labels[sidx]]).query(np.c_[V_tgt[tq], big * tgt_part[tq]], workers=-1)
+    d, i = cKDTree(np.c_[X[sidx], big * labels[sidx]]).query(np.c_[T, big * part_t], workers=-1)
     i = sidx[i]
-    ok = (np.einsum("ij,ij->i", N[i], N_tgt[tq]) >= cos_max) & (d <= 5.0 * np.median(d) + 1e-12)
-    i, k = i[ok], tq[ok]
+    ok = (np.einsum("ij,ij->i", N[i], N_t) >= cos_max) & (d <= 5.0 * np.median(d) + 1e-12)
+    i, k = i[ok], np.flatnonzero(ok)
     a = np.bincount(i, area_t[k], minlength=len(X))
     has = a > 0
-    M = np.stack([np.bincount(i, area_t[k] * V_tgt[k, c], minlength=len(X)) for c in range(3)], axis=1)
+    M = np.stack([np.bincount(i, area_t[k] * T[k, c], minlength=len(X)) for c in range(3)], axis=1)
     M[has] /= a[has, None]
     return has, M, a
+
+
+# a target denser than SAMPLE_RATIO x the source is matched back through grid cells of half the source's
+# median edge: the centroid of a source vertex's target area is the same, at a fraction of the queries
+SAMPLE_RATIO = 4
+
+
+def _target_samples(V_tgt, N_tgt, part, area, tq, cell):
+    """The target vertices ``tq`` as reverse-match samples: themselves, or where ``cell`` > 0 their
+    area-weighted centroids per grid cell of that size and part. Returns points (k, 3), unit normals
+    (k, 3), parts (k,) and areas (k,)."""
+    if cell <= 0:
+        return V_tgt[tq], N_tgt[tq], part[tq], area[tq]
+    P = V_tgt[tq]
+    key = np.c_[np.floor((P - P.min(axis=0)) / cell).astype(np.int64), part[tq]]
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    w = area[tq] + 1e-12 * (area[tq].mean() + 1e-300)   # a cell of zero-area vertices keeps its place
+    m = len(first)
+    sw = np.bincount(inv, w, minlength=m)
+    T = np.stack([np.bincount(inv, w * P[:, c], minlength=m) for c in range(3)], axis=1) / sw[:, None]
+    Nt = np.stack([np.bincount(inv, w * N_tgt[tq, c], minlength=m) for c in range(3)], axis=1)
+    Nt /= np.maximum(np.linalg.norm(Nt, axis=1, keepdims=True), 1e-300)
+    return T, Nt, part[tq][first], np.bincount(inv, area[tq], minlength=m)
 
 
 def _decimate(V, F, count):
@@ -292,7 +322,11 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
         sidx = np.flatnonzero(in_face & ((labels >= 0) | (not restrict_parts)))
         tq = np.flatnonzero(tgt_in_face & np.isin(tlab, labels[sidx]))
         if len(sidx) and len(tq):
-            reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), tlab, sidx, tq)
+            cell = 0.0
+            if len(tq) > SAMPLE_RATIO * len(sidx):
+                cell = 0.5 * float(np.median(np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1)))
+            samples = _target_samples(V_tgt, N_tgt, tlab, tgt["area"], tq, cell)
+            reverse = (np.maximum(vertex_areas(X, F_src), 1e-300), sidx, samples)
     if X0 is not None:
         X = X0.copy()
     match = _Matcher(V_tgt, F_tgt, tgt, labels, in_face, bidx, btrees, cos_max, exact, symmetric_weight, reverse)
@@ -349,8 +383,8 @@ class _Matcher:
             C[bidx] = V_tgt[self.btrees.query(X[bidx], labels[bidx])]
         C[~in_face] = X[~in_face]
         if self.reverse is not None:
-            area_s, tlab, sidx, tq = self.reverse
-            has, M, a = _reverse_matches(X, N, labels, sidx, V_tgt, tgt["N"], tlab, tq, tgt["area"],
+            area_s, sidx, samples = self.reverse
+            has, M, a = _reverse_matches(X, N, labels, sidx, *samples,
                                          tgt["trees"].big, self.cos_max)
             has[bidx] = False
             r = self.symmetric_weight * np.minimum(a[has] / area_s[has], 4.0)[:, None]

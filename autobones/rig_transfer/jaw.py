@@ -174,7 +174,8 @@ def lip_line_edges(V, F, landmarks):
     length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
     radius = max(CORNER * fu, 2.0 * float(np.median(length))) if len(E) else 0.0
     for name in ("cheilion_l", "cheilion_r"):
-        near = np.linalg.norm(V - np.asarray(landmarks[name], dtype=np.float64), axis=1) < radius
+        d = V - np.asarray(landmarks[name], dtype=np.float64)
+        near = np.einsum("ij,ij->i", d, d) < radius * radius
         on_line |= near[E[:, 0]] | near[E[:, 1]]
     return E, on_line
 
@@ -222,10 +223,13 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
     # --- seeds -----------------------------------------------------------------------------------
     lower = np.zeros(nw, dtype=bool)
     upper = np.zeros(nw, dtype=bool)
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(Vw)
     for names, mask in ((LOWER, lower), (UPPER, upper)):
-        for name in names:
-            if name in lm:
-                mask[np.argmin(np.linalg.norm(Vw - lm[name], axis=1))] = True
+        given = [lm[name] for name in names if name in lm]
+        if given:
+            mask[tree.query(np.array(given), workers=-1)[1]] = True
     mouth = mouth_frame(lm)
     side = np.zeros(nw, dtype=np.int8)
     if mouth is not None:
@@ -267,8 +271,6 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
     # its Laplacian cover only the jaw's surroundings, a fraction of a dense scan
     source = (ww > 0) | lower
     if source.any() and (~fixed).any():
-        from scipy.spatial import cKDTree
-
         reach = max(REACH * fu, 30.0 * h_med)
         far = np.isinf(cKDTree(Vw[source]).query(Vw, distance_upper_bound=reach, workers=-1)[0])
         settled = ~fixed & far
