@@ -32,6 +32,15 @@ Lids: per head and side, the fraction of the lid gap ``eyeBlinkLeft`` / ``eyeBli
 (:func:`autobones.arkit.lids.gap_closure`: between the skin vertices nearest the palpebrale
 landmarks, between the landmarks' own points, and the latter's vertical part), for the truth,
 deformation transfer and the copy.
+
+Folds (:mod:`autobones.arkit.folds`): the transfer is scored without and with the opt-in fold repair
+(``DT skin`` / ``DT all`` are without it, as ``transfer --arkit`` makes them), with the triangles each shape
+turns over at weight 1 before and after it (``mouthClose`` on top of ``jawOpen``) and the time it adds.
+``--fold-heads`` instead runs ``autobones.transfer`` and ``arkit_targets(rig, repair_folds=True)`` on the shared heads (james,
+menpo3d's template, LeePerrySmith and demosthenes with detected landmarks, ICT identity002, the goat
+and the robot) and prints the sidecar's fold counts per head and shape, before and after the repair::
+
+    python benchmarks/arkit.py --fold-heads
 """
 from __future__ import annotations
 
@@ -47,10 +56,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from autobones.arkit.copy_baseline import copy_displacements, similarity  # noqa: E402
+from autobones.arkit.folds import unfold_shapes  # noqa: E402
 from autobones.arkit.lids import eye_sides, gap_closure  # noqa: E402
 from autobones.arkit.names import ict_names  # noqa: E402
 from autobones.arkit.shapes import load_shapes  # noqa: E402
-from autobones.arkit.targets import deformation_targets  # noqa: E402
+from autobones.arkit.targets import arkit_targets, deformation_targets  # noqa: E402
 from autobones.geometry.closest import closest_points  # noqa: E402
 from autobones.geometry.topology import mesh_parts  # noqa: E402
 from autobones.io.obj import read_obj  # noqa: E402
@@ -123,11 +133,16 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
     frame = frame_from_landmarks(Vt, Ft, lm_t) if one_surface else None
     X = deformation_targets(S, D, P, Vt, Ft, lm_t, frame, timings=timings, close_lids=close_lids)
     t_dt = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    X0 = X  # as transfer --arkit makes them (the repair is opt-in); X: with the fold repair
+    X, folds = unfold_shapes(Vt, Ft, X0, names)
+    t_fold = time.perf_counter() - t0
     shared = [n for n in S.landmarks if n in lm_t]
     s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm_t[n] for n in shared]))
     C = copy_displacements(S.faces, D, P, Vt, s, R)
     every = np.ones(len(Vt), dtype=bool)
-    rows = {n: (score(X[j], T[j], tskin), score(C[j], T[j], tskin), score(X[j], T[j], every), score(C[j], T[j], every))
+    rows = {n: (score(X0[j], T[j], tskin), score(C[j], T[j], tskin), score(X0[j], T[j], every), score(C[j], T[j], every),
+                score(X[j], T[j], tskin), score(X[j], T[j], every))
             for j, n in enumerate(names)}
     up = frame_from_landmarks(Vt, Ft, lm_t).rotation[1]
     lids = {}
@@ -135,7 +150,8 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
         j = names.index("eyeBlinkLeft" if side == "l" else "eyeBlinkRight")
         lids[side] = {m: gap_closure(Vt, Ft, A[j], lm_t, side, up) for m, A in (("truth", T), ("DT", X), ("copy", C))}
     return {"identity": k, "vertices": len(Vt), "triangles": len(Ft), "correspond_s": t_corr, "transfer_s": t_dt,
-            "dt_timings": timings, "rows": rows, "lids": lids}
+            "dt_timings": timings, "rows": rows, "lids": lids, "fold_s": t_fold,
+            "folds": {n: (r["before"], r["after"]) for n, r in folds.items()}}
 
 
 def main(argv=None):
@@ -146,7 +162,11 @@ def main(argv=None):
                     help="keep only each head's skin and take it as a one-surface scan (eye surface free, lids closed)")
     ap.add_argument("--no-lids", action="store_true", help="with --one-surface: only set the eye surface free")
     ap.add_argument("--json", help="also write the numbers here")
+    ap.add_argument("--fold-heads", action="store_true",
+                    help="fold counts of transfer --arkit on the shared heads, goat and robot, before/after the repair")
     args = ap.parse_args(argv)
+    if args.fold_heads:
+        return fold_heads()
     S = load_shapes()
     neutral, F = read_obj(os.path.join(ICT, "generic_neutral_mesh.obj"))
     part = mesh_parts(len(neutral), F)
@@ -176,6 +196,8 @@ def main(argv=None):
           "| DT skin | copy skin | DT all | copy all |")
     print("|---|---|---|---|---|")
     print("| mean | " + " | ".join(f"{M[:, :, c].mean():.1%}" for c in range(4)) + " |")
+    repaired = (f"DT skin {M[:, :, 4].mean():.1%} / worst {M[:, :, 4].mean(axis=0).min():.1%}, "
+              f"DT all {M[:, :, 5].mean():.1%}")
     print("| worst shape (mean over identities) | " + " | ".join(f"{per[:, c].min():.1%}" for c in range(4)) + " |")
     print("| worst shape on any identity | " + " | ".join(f"{M[:, :, c].min():.1%}" for c in range(4)) + " |")
     print()
@@ -188,6 +210,17 @@ def main(argv=None):
             print(f"| identity{r['identity']:03d} | {side} | " + " | ".join(
                 " / ".join(f"{c[m][w]:.0%}" for w in ("vertices", "points", "vertical")) for m in ("truth", "DT", "copy"))
                 + " |")
+    print(f"\nwith the fold repair: {repaired}; without: DT skin {M[:, :, 0].mean():.1%} / worst "
+          f"{per[:, 0].min():.1%}, DT all {M[:, :, 2].mean():.1%}; repair time median "
+          f"{np.median([r['fold_s'] for r in results]):.2f} s")
+    print()
+    print("Triangles turned over at weight 1 (mouthClose on top of jawOpen), before -> after the repair:")
+    print()
+    print("| shape | " + " | ".join(f"identity{r['identity']:03d}" for r in results) + " |")
+    print("|---|" + "---|" * len(results))
+    for n in names:
+        if any(r["folds"][n][0] for r in results):
+            print(f"| {n} | " + " | ".join(f"{r['folds'][n][0]} -> {r['folds'][n][1]}" for r in results) + " |")
     ts = [r["transfer_s"] for r in results]
     print(f"\ntime, all {len(names)} shapes by deformation transfer: median {np.median(ts):.1f} s "
           f"(min {min(ts):.1f}, max {max(ts):.1f}) on ~{results[0]['vertices']}-vertex heads; "
@@ -195,6 +228,40 @@ def main(argv=None):
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(results, fh, indent=1, default=float)
+
+
+FOLD_HEADS = {  # name: (mesh, landmarks; None: detected by autobones.transfer)
+    "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
+    "template": ("menpo3d/template.ply", "menpo3d/template.landmarks.json"),
+    "LeePerrySmith": ("misc/LeePerrySmith.obj", None),
+    "demosthenes": ("misc/demosthenes-low-res.obj", None),
+    "identity002": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
+    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
+    "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
+}
+
+
+def fold_heads():
+    """transfer --arkit on each of :data:`FOLD_HEADS`: the sidecar's folds per shape, before -> after."""
+    import autobones
+
+    data = os.path.join(ROOT, "..", "shared", "data")
+    recs = {}
+    for head, (mesh, lm) in FOLD_HEADS.items():
+        lm = None if lm is None else os.path.join(ROOT if lm.startswith("tests/") else data, lm)
+        t = time.perf_counter()
+        rig = autobones.transfer(os.path.join(data, mesh), lm)
+        recs[head] = arkit_targets(rig, repair_folds=True)[1]["folds"]  # before: as transfer --arkit makes them
+        print(f"{head}: {len(rig.vertices)} vertices, transfer --arkit {time.perf_counter() - t:.1f} s", flush=True)
+    names = [n for n in next(iter(recs.values()))["before_repair"]
+             if any(r["before_repair"][n] or r["after_repair"][n] for r in recs.values())]
+    print()
+    print("| shape | " + " | ".join(recs) + " |")
+    print("|---|" + "---|" * len(recs))
+    for n in names:
+        print(f"| {n} | " + " | ".join(f"{r['before_repair'][n]} -> {r['after_repair'][n]}" for r in recs.values()) + " |")
+    print("| all shapes | " + " | ".join(f"{sum(r['before_repair'].values())} -> {sum(r['after_repair'].values())}"
+                                        for r in recs.values()) + " |")
 
 
 if __name__ == "__main__":

@@ -77,7 +77,9 @@ def _flipped_note(record):
     """``; triangles turned over at weight 1: mouthClose 5 (ICT's own 597), ...`` for the shapes that fold any."""
     record = record or {}
     src = record.get("source_flipped_triangles", {})
-    bad = {n: c for n, c in record.get("flipped_triangles", {}).items() if c}
+    # after the fold repair, mouthClose judged on top of jawOpen as ARKit drives it; older records: each alone
+    counts = record.get("folds", {}).get("after_repair", record.get("flipped_triangles", {}))
+    bad = {n: c for n, c in counts.items() if c}
     return ("; triangles turned over at weight 1: " + ", ".join(f"{n} {c} (ICT's own {src.get(n, 0)})"
                                                               for n, c in bad.items())) if bad else ""
 

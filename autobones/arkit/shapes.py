@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..geometry.normals import triangle_normals
+from .folds import folded_triangles
 from .names import ABSENT, ARKIT_NAMES
 
 # landmarks a set and a head must share: the correspondence's TPS needs a few non-coplanar points
@@ -99,4 +100,4 @@ def flipped_triangles(V, F, deltas):
     displacement ``D`` (n, 3) of ``deltas`` (dict name -> D): dict name -> count. The rest normals
     are computed once for all shapes."""
     rest = triangle_normals(V, F)
-    return {n: int((np.einsum("ij,ij->i", rest, triangle_normals(V + D, F)) < 0).sum()) for n, D in deltas.items()}
+    return {n: int(folded_triangles(V, F, D, rest_normals=rest).sum()) for n, D in deltas.items()}

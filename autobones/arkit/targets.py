@@ -30,6 +30,7 @@ from ..geometry.normals import triangle_normals
 from ..geometry.topology import mesh_parts
 from .copy_baseline import copy_displacements, similarity
 from .deformation_transfer import DeformationTransfer
+from .folds import ON_TOP, folded_triangles, unfold_shapes
 from .lids import LidClosure, eye_sides, margin_points
 from .names import ARKIT_NAMES, EYE_LOOK
 from .shapes import MIN_LANDMARKS, flipped_triangles, load_shapes
@@ -173,7 +174,7 @@ def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, ke
     return X
 
 
-def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_options):
+def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_folds=True, **fit_options):
     """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
 
     Parameters
@@ -186,7 +187,12 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     method : "deformation" or "copy"
         Deformation transfer, or the copy baseline (:mod:`.copy_baseline`; for comparison).
     timings : dict, optional
-        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``lids`` (one-surface heads), ``eyes``.
+        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``lids`` (one-surface heads), ``folds``,
+        ``eyes``.
+    repair_folds : bool
+        Turn back the triangles a shape turns over at weight 1, moving only their vertices
+        (:func:`autobones.arkit.folds.unfold_shapes`; ``mouthClose`` judged on top of ``jawOpen``).
+        False: the shapes as carried (for comparison).
     **fit_options
         Passed to :func:`dense_correspondence`.
 
@@ -197,7 +203,9 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
         float32 (what the glb stores, so a reloaded rig poses identically).
     record : dict
         For the sidecar: ``names``, ``source``, ``method``, ``absent``, ``eyes``,
-        ``flipped_triangles`` (per name, at weight 1), ``max_displacement`` (mesh units).
+        ``flipped_triangles`` (per name, at weight 1, each shape alone), ``folds`` (the fold repair,
+        :mod:`.folds`: triangles turned over before and after it, ``mouthClose`` judged on top of
+        ``jawOpen``), ``max_displacement`` (mesh units).
     """
     from ..rig_transfer.correspondence import dense_correspondence
 
@@ -232,6 +240,12 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
         X[:, keep] = 0.0
     else:
         raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
+    # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose on top of jawOpen)
+    t = time.perf_counter()
+    fold_report = {}
+    if repair_folds:
+        X, fold_report = unfold_shapes(V, F, X, names, fixed=keep)
+    tim["folds"] = time.perf_counter() - t
     t = time.perf_counter()
     by_name = dict(zip(names, X))
     if eyes:
@@ -252,6 +266,12 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
     tim["eyes"] = time.perf_counter() - t
     if timings is not None:
         timings.update(tim)
+    # each shape alone, as ever; a shape meant on top of another (mouthClose) also judged that way
+    alone = flipped_triangles(V, F, {n: targets[n] for n in ARKIT_NAMES})
+    judged = dict(alone)
+    for n, b in ON_TOP.items():
+        if n in by_name and b in by_name:
+            judged[n] = int(folded_triangles(V, F, targets[n], targets[b]).sum())
     record = {
         "format": "autobones-arkit/1",
         "names": list(ARKIT_NAMES),
@@ -265,14 +285,23 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, **fit_op
         "eyes": ("eyeLook* turn the separate eyeballs about " + ", ".join(sorted(eyes)) + " by "
                  + ", ".join(f"{k.lower()} {v:g} deg" for k, v in EYE_TURN_DEG.items())) if eyes else
                 "no separate eyeballs: eyeLook* move the lids and eye surface as the skin transfer gives",
-        "flipped_triangles": flipped_triangles(V, F, {n: targets[n] for n in ARKIT_NAMES}),
+        "flipped_triangles": alone,
         # the same count for the source's own shapes on its own skin: ICT folds some (mouthClose)
         "source_flipped_triangles": S.meta.get("source_flipped_triangles", {}),
+        "folds": {
+            "rule": "triangles whose normal turns over at weight 1 (each shape alone, but mouthClose on top of "
+                    "jawOpen at weight 1, as ARKit drives it), before and after the local fold repair",
+            "on_top_of": {n: b for n, b in ON_TOP.items() if n in by_name and b in by_name},
+            "repaired": bool(repair_folds),
+            "before_repair": ({n: fold_report[n]["before"] if n in fold_report else 0 for n in ARKIT_NAMES}
+                              if repair_folds else judged),
+            "after_repair": judged,
+        },
         "max_displacement": {n: float(np.linalg.norm(targets[n], axis=1).max(initial=0.0)) for n in ARKIT_NAMES},
     }
     src = record["source_flipped_triangles"]
-    bad = {n: c for n, c in record["flipped_triangles"].items() if c > src.get(n, 0)}
+    bad = {n: c for n, c in judged.items() if c > src.get(n, 0)}
     if bad:  # ICT's own shapes fold some (mouthClose): only more than the source's is news
-        log.warning("ARKit shapes: more triangles turned over at weight 1 than in the source shapes: %s",
+        log.warning("ARKit shapes: triangles still turned over at weight 1 after the fold repair: %s",
                     ", ".join(f"{n} {c} (source {src.get(n, 0)})" for n, c in bad.items()))
     return targets, record
