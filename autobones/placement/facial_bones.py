@@ -20,6 +20,7 @@ from scipy.cluster.vq import vq
 
 from ..errors import AutobonesError
 from ..geometry.areas import vertex_areas
+from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
 
 DENSITIES = {"sparse": 8, "medium": 16, "dense": 32}
@@ -228,12 +229,10 @@ def _nearest(X, C):
 def _under_skin(V, F, P, partner, max_depth):
     """Centroids deeper than ``max_depth`` under the skin (a sparse bone on a curved or boxy
     face) are pulled toward their closest surface point, then re-mirrored."""
-    import igl
-
-    V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
     P = P.copy()
     for _ in range(3):  # mirroring can move a point off the surface again; a few rounds settle it
-        d2, _, closest = igl.point_mesh_squared_distance(P, V, F)
+        # a few dozen points on a scan: the near-triangle path, not a tree over every triangle
+        closest, _, _, d2 = closest_points(P, V, F)
         d = np.sqrt(d2)
         deep = d > max_depth
         if not deep.any():
