@@ -32,6 +32,8 @@ Distances in this module are in units of the detected outer-eye-corner distance
 from __future__ import annotations
 
 import contextlib
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -259,12 +261,18 @@ class LandmarkDetector:
         Fs = F if skin.all() else F[skin]
         N = vertex_normals(Vc, F)
         tree = cKDTree(Vc)
-        for yaw, pitch in self.views:
-            d = view_direction(yaw, pitch)
+        def picture(view):
+            d = view_direction(*view)
             cam = face_camera(target, d, width, self.size)
             buf = rasterize(Vc, F, cam)
             light = cam.view[:3, :3].T @ (np.array(KEY_LIGHT) / np.linalg.norm(KEY_LIGHT))
-            px = detector(shade(Vc, F, buf, light_dir=light, ambient=0.15))
+            return d, buf, shade(Vc, F, buf, light_dir=light, ambient=0.15)
+
+        # the pictures are independent numpy work: drawn two at a time; the detector reads them in order
+        with ThreadPoolExecutor(max_workers=min(len(self.views), os.cpu_count() or 1)) as pool:
+            pictures = list(pool.map(picture, self.views))
+        for (yaw, pitch), (d, buf, image) in zip(self.views, pictures):
+            px = detector(image)
             px = None if px is None else px[:, :2]
             view_info.append({"yaw": float(yaw), "pitch": float(pitch), "face": px is not None})
             if px is None:
