@@ -107,12 +107,27 @@ def gradient_operator(V, F):
     return G, area
 
 
-def source_gradients(V, F, deltas, faces=None):
-    """Deformation gradients ``Q`` (k, len(faces), 3, 3) of shapes ``V + deltas[j]`` (deltas (k, n, 3))."""
+def source_gradients(V, F, deltas, faces=None, turn=None):
+    """Deformation gradients minus the identity, ``J`` (k, len(faces), 3, 3), of shapes ``V + deltas[j]``
+    (deltas (k, n, 3)), each turned as ``turn Q turn^T`` when ``turn`` (len(faces), 3, 3) is given.
+
+    A triangle none of whose corners a shape moves has ``J = 0`` (computed only where a corner moves:
+    most shapes move a small part of the head); a degenerate one (no frame) has ``J = -I``.
+    """
     faces = np.arange(len(F)) if faces is None else np.asarray(faces)
     Fu = F[faces]
     Einv = _inverse(triangle_frames(V, Fu))
-    return np.stack([triangle_frames(V + D, Fu) @ Einv for D in deltas])
+    degenerate = ~(Einv != 0).any(axis=(1, 2))
+    J = np.zeros((len(deltas), len(Fu), 3, 3))
+    J[:, degenerate] = -np.eye(3)
+    for j, D in enumerate(deltas):
+        m = np.flatnonzero((D[Fu] != 0).any(axis=(1, 2)) & ~degenerate)
+        if len(m):
+            Q = triangle_frames(V + D, Fu[m]) @ Einv[m]
+            if turn is not None:
+                Q = turn[m] @ Q @ np.transpose(turn[m], (0, 2, 1))
+            J[j, m] = Q - np.eye(3)
+    return J
 
 
 class DeformationTransfer:
@@ -309,9 +324,7 @@ class DeformationTransfer:
         rhs = np.zeros((self.n_t_, 3 * k))
         if len(used):
             # turned gradients on the source triangles used (fewer than the target's), all shapes at once
-            R = self._turn_src[used]
-            J = R[None] @ source_gradients(self.V_src_, self.F_src_, deltas, used) @ np.transpose(R, (0, 2, 1))[None]
-            J -= np.eye(3)
+            J = source_gradients(self.V_src_, self.F_src_, deltas, used, turn=self._turn_src[used])
             # G's row 3t + c is d/dx_c, so shape j's column of coordinate i wants J[j, i, c]
             rhs = self._B @ np.transpose(J, (1, 3, 0, 2)).reshape(3 * len(used), 3 * k)
         solve = self._solve
