@@ -48,7 +48,7 @@ import scipy.sparse as sp
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
-from ..geometry.normals import triangle_normals
+from ..geometry.normals import cross_rows, triangle_normals
 from ..geometry.topology import mesh_parts
 
 log = logging.getLogger(__name__)
@@ -58,7 +58,7 @@ def triangle_frames(V, F):
     """Sumner & Popovic's frames ``[v2 - v1, v3 - v1, n / sqrt(|n|)]`` as columns, (m, 3, 3) float64."""
     V = np.asarray(V, dtype=np.float64)
     e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
-    n = np.cross(e1, e2)
+    n = cross_rows(e1, e2)
     n = n / np.sqrt(np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300))
     return np.stack([e1, e2, n], axis=2)
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import AutobonesError
-from ..geometry.normals import triangle_normals
+from ..geometry.normals import cross_rows, triangle_normals
 
 # ARKit shapes driven together with another: judged (and repaired) on top of it
 ON_TOP = {"mouthClose": "jawOpen"}
@@ -64,7 +64,7 @@ def folded_triangles(V, F, D, base=None, rest_normals=None):
 def _signed_areas(X, F, T, unit_normals):
     """Areas (len(T),) of triangles ``F[T]`` at ``X``, signed along their unit rest normals."""
     x0, x1, x2 = X[F[T, 0]], X[F[T, 1]], X[F[T, 2]]
-    return 0.5 * np.einsum("ij,ij->i", unit_normals[T], np.cross(x1 - x0, x2 - x0))
+    return 0.5 * np.einsum("ij,ij->i", unit_normals[T], cross_rows(x1 - x0, x2 - x0))
 
 
 def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=1000, rest_normals=None):
@@ -142,7 +142,7 @@ def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=1000, rest_nor
         Tb = T[viol]
         x0, x1, x2 = X[F[Tb, 0]], X[F[Tb, 1]], X[F[Tb, 2]]
         u = unit[Tb]
-        grads = (0.5 * np.cross(x1 - x2, u), 0.5 * np.cross(x2 - x0, u), 0.5 * np.cross(x0 - x1, u))
+        grads = (0.5 * cross_rows(x1 - x2, u), 0.5 * cross_rows(x2 - x0, u), 0.5 * cross_rows(x0 - x1, u))
         wk = [w[F[Tb, k]] for k in range(3)]
         den = sum(wc * np.einsum("ij,ij->i", g, g) for wc, g in zip(wk, grads))
         lam = (target[Tb] - A[viol]) / np.maximum(den, 1e-300)
