@@ -190,6 +190,40 @@ def _target_samples(V_tgt, N_tgt, part, area, tq, cell):
     return T, Nt, part[tq][first], np.bincount(inv, area[tq], minlength=m)
 
 
+def _boundary_neighbours(n, F):
+    """(n, 2) int64: each boundary vertex's neighbours along the boundary (-1 where none; a vertex
+    where more than two boundary edges meet keeps two of them)."""
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    E.sort(axis=1)
+    u, count = np.unique(E[:, 0] * n + E[:, 1], return_counts=True)
+    b = u[count == 1]
+    ends, other = np.r_[b // n, b % n], np.r_[b % n, b // n]
+    order = np.argsort(ends, kind="stable")
+    ends, other = ends[order], other[order]
+    first = np.r_[True, ends[1:] != ends[:-1]]
+    second = ~first & np.r_[False, first[:-1]]
+    nb = np.full((n, 2), -1, dtype=np.int64)
+    nb[ends[first], 0] = other[first]
+    nb[ends[second], 1] = other[second]
+    return nb
+
+
+def _onto_rim(X, j, V, nb):
+    """Closest points (k, 3) to ``X`` (k, 3) on the boundary edges at each one's nearest boundary vertex ``j``."""
+    best = V[j].copy()
+    d2 = ((X - best) ** 2).sum(axis=1)
+    for c in range(2):
+        ok = np.flatnonzero(nb[j, c] >= 0)
+        a = V[j[ok]]
+        e = V[nb[j[ok], c]] - a
+        t = np.clip(((X[ok] - a) * e).sum(axis=1) / np.maximum((e * e).sum(axis=1), 1e-300), 0.0, 1.0)
+        P = a + t[:, None] * e
+        d = ((X[ok] - P) ** 2).sum(axis=1)
+        better = d < d2[ok]
+        best[ok[better]], d2[ok[better]] = P[better], d[better]
+    return best
+
+
 def _decimate(V, F, count):
     """Quadric-error decimation of ``(V, F)`` to about ``count`` vertices (fast_simplification, else libigl)."""
     try:
@@ -279,6 +313,7 @@ def _target_terms(tgt, V_tgt, F_tgt):
     tgt["trees"] = _PartTrees(V_tgt, tgt["in_face"], tgt["part"])
     tgt["bnd"] = boundary_vertices(nt, F_tgt)
     tgt["btrees"] = _PartTrees(V_tgt, tgt["bnd"], tgt["part"]) if tgt["bnd"].any() else None
+    tgt["bnb"] = _boundary_neighbours(nt, F_tgt) if tgt["bnd"].any() else None
     tgt["area"] = vertex_areas(V_tgt, F_tgt)
     return tgt
 
@@ -380,7 +415,9 @@ class _Matcher:
         bad = (np.einsum("ij,ij->i", N, nj) < self.cos_max) | (dist > 5.0 * np.median(dist[in_face]) + 1e-12)
         C[bad] = X[bad]
         if len(bidx):
-            C[bidx] = V_tgt[self.btrees.query(X[bidx], labels[bidx])]
+            # the closest point of the target's rim (its two rim edges at the nearest rim vertex):
+            # snapping to rim vertices bunched the source rim on a coarse target's long rim edges
+            C[bidx] = _onto_rim(X[bidx], self.btrees.query(X[bidx], labels[bidx]), V_tgt, tgt["bnb"])
         C[~in_face] = X[~in_face]
         if self.reverse is not None:
             area_s, sidx, samples = self.reverse
