@@ -55,7 +55,8 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from autobones.arkit.copy_baseline import copy_displacements, similarity  # noqa: E402
+from autobones.arkit.copy_baseline import copy_displacements  # noqa: E402
+from autobones.geometry.rotations import similarity  # noqa: E402
 from autobones.arkit.folds import unfold_shapes  # noqa: E402
 from autobones.arkit.lids import eye_sides, gap_closure  # noqa: E402
 from autobones.arkit.names import ict_names  # noqa: E402

@@ -7,7 +7,7 @@ from autobones.errors import AutobonesError
 from autobones.geometry import laplacian as lap
 from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
-from autobones.geometry.rotations import rotate_between
+from autobones.geometry.rotations import rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import boundary_vertices, largest_part, mesh_edges, mesh_parts, weld
 from autobones.geometry.validate import mesh_arrays
@@ -135,6 +135,18 @@ def test_smooth_steps_are_monotone_c1_and_hit_their_ends():
     assert np.abs(np.diff(s, 2)).max() < 1e-5                             # no kink
     assert ramp(2.0, 2.0, 4.0) == 0 and ramp(4.0, 2.0, 4.0) == 1 and ramp(3.0, 4.0, 2.0) == 0.5
     assert step(0.0, 0.0, 2.0) == 0.5 and step(-1.0, 0.0, 2.0) == 0 and step(1.0, 0.0, 2.0) == 1
+
+
+def test_similarity_recovers_a_scaled_turned_point_set_and_never_mirrors():
+    rng = np.random.default_rng(3)
+    P = rng.standard_normal((20, 3))
+    R0 = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    R0 *= np.sign(np.linalg.det(R0))
+    Q = 2.5 * P @ R0.T + [1.0, -2.0, 3.0]
+    s, R = similarity(P, Q)
+    assert abs(s - 2.5) < 1e-12 and np.abs(R - R0).max() < 1e-12
+    s, R = similarity(P, P * [-1.0, 1.0, 1.0])        # a mirror image: the best proper rotation
+    assert np.linalg.det(R) > 0
 
 
 def test_rotate_between_takes_a_to_b_and_keeps_lengths():

@@ -12,17 +12,6 @@ import numpy as np
 from ..geometry.closest import closest_points
 
 
-def similarity(P, Q):
-    """Scale ``s`` and rotation ``R`` (3, 3) minimising ``sum ||s R (p - mean p) - (q - mean q)||^2``."""
-    P0, Q0 = P - P.mean(axis=0), Q - Q.mean(axis=0)
-    U, S, Vt = np.linalg.svd(Q0.T @ P0)
-    d = np.sign(np.linalg.det(U @ Vt)) or 1.0
-    D = np.diag([1.0, 1.0, d])
-    R = U @ D @ Vt
-    s = float(np.trace(np.diag(S) @ D) / max((P0 ** 2).sum(), 1e-300))
-    return s, R
-
-
 def copy_displacements(F_src, deltas, P, V_tgt, scale, rotation):
     """Copied displacements (k, n_t, 3): ``scale * rotation @ delta`` at each target vertex's closest
     point on ``(P, F_src)``; ``deltas`` (k, n_s, 3) in source units, ``P`` (n_s, 3) target frame."""

@@ -90,13 +90,13 @@ def gradient_operator(V, F):
     V = np.asarray(V, dtype=np.float64)
     m = len(F)
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    n = np.cross(b - a, c - a)
+    n = cross_rows(b - a, c - a)
     dbl = np.linalg.norm(n, axis=1)
     area = 0.5 * dbl
     unit = n / np.maximum(dbl, 1e-300)[:, None]
     scale = 1.0 / np.maximum(dbl, 1e-300)[:, None]
     # grad of vertex i's hat function: (n x opposite edge) / (2 area)
-    gi = [np.cross(unit, c - b) * scale, np.cross(unit, a - c) * scale, np.cross(unit, b - a) * scale]
+    gi = [cross_rows(unit, c - b) * scale, cross_rows(unit, a - c) * scale, cross_rows(unit, b - a) * scale]
     rows = (3 * np.arange(m)[:, None] + np.arange(3)[None, :])  # (m, 3)
     R, C, X = [], [], []
     for k in range(3):

@@ -52,7 +52,7 @@ import scipy.sparse as sp
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.topology import mesh_parts
-from .copy_baseline import similarity
+from ..geometry.rotations import similarity
 
 # vertices where the gap is narrower than this fraction of the eye's widest are not placed (the
 # corners): there s is ill-defined, and pinned they folded a few of LeePerrySmith's small triangles

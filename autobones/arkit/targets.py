@@ -27,8 +27,9 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..geometry.normals import triangle_normals
+from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
-from .copy_baseline import copy_displacements, similarity
+from .copy_baseline import copy_displacements
 from .deformation_transfer import DeformationTransfer
 from .folds import ON_TOP, folded_triangles, unfold_shapes
 from .lids import LidClosure, eye_sides, margin_points

@@ -9,6 +9,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..errors import AutobonesError
+from .normals import cross_rows
 
 try:  # optional extra `autobones[cholmod]`: a supernodal Cholesky, faster again on large meshes
     from sksparse.cholmod import cholesky as _cholmod
@@ -56,10 +57,8 @@ def clipped_cotangent_laplacian(V, F, floor=1e-6):
         i, j, o = F[:, (k + 1) % 3], F[:, (k + 2) % 3], F[:, k]
         a, b = V[i] - V[o], V[j] - V[o]
         dot = a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
-        cx = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-        cy = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-        cz = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-        area2 = np.sqrt(cx * cx + cy * cy + cz * cz)
+        c = cross_rows(a, b)
+        area2 = np.sqrt(c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2])
         rows += [i, j]
         cols += [j, i]
         w = np.where(area2 > 0, 0.5 * dot / np.where(area2 > 0, area2, 1.0), 0.0)

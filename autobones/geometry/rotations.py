@@ -1,4 +1,5 @@
-"""Rotations: about the axes, from Euler angles, between two directions, the +X turn of points, the 24 axis turns."""
+"""Rotations: about the axes, from Euler angles, between two directions, the best similarity between point sets,
+the +X turn of points, the 24 axis turns."""
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -61,6 +62,19 @@ def align_rotation(a, b):
         return axis_rotation(1, 180.0)
     K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
     return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def similarity(P, Q):
+    """Least-squares similarity (Umeyama 1991) taking points ``P`` (k, 3) onto ``Q`` (k, 3) about their
+    means: scale ``s`` and proper rotation ``R`` (3, 3) minimising ``sum ||s R (p - mean p) - (q - mean q)||^2``
+    (the translation is ``mean q - s R mean p``)."""
+    P0, Q0 = P - P.mean(axis=0), Q - Q.mean(axis=0)
+    U, S, Vt = np.linalg.svd(Q0.T @ P0)
+    d = np.sign(np.linalg.det(U @ Vt)) or 1.0
+    D = np.diag([1.0, 1.0, d])
+    R = U @ D @ Vt
+    s = float(np.trace(np.diag(S) @ D) / max((P0 ** 2).sum(), 1e-300))
+    return s, R
 
 
 def x_turn(P, angle):

@@ -40,6 +40,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..errors import AutobonesError
+from ..geometry.rotations import similarity
 
 UPPER_WEIGHT = 0.05        # landmarks with less jaw weight than this place the upper face (the similarity)
 LOWER_WEIGHT = 0.5         # the angle needs at least one landmark this much on the jaw
@@ -211,21 +212,6 @@ def open_jaw(V, weight, pivot, axis, angle):
     return out
 
 
-def _similarity(A, B):
-    """Least-squares similarity (Umeyama 1991) taking points ``A`` (k, 3) to ``B`` (k, 3):
-    (s, R (3, 3), t (3,)) with ``B ~ s A R^T + t``; a proper rotation."""
-    a0, b0 = A.mean(axis=0), B.mean(axis=0)
-    A0, B0 = A - a0, B - b0
-    U, S, Vt = np.linalg.svd(B0.T @ A0)
-    D = np.eye(3)
-    if np.linalg.det(U @ Vt) < 0:
-        D[2, 2] = -1.0
-    R = U @ D @ Vt
-    var = (A0 ** 2).sum()
-    s = float(np.trace(np.diag(S) @ D) / var) if var > 0 else 1.0
-    return s, R, b0 - s * a0 @ R.T
-
-
 def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None):
     """The jaw opening (degrees) that brings the source landmarks ``P`` closest to the target's ``Q``.
 
@@ -259,7 +245,8 @@ def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None):
     if upper.sum() < MIN_UPPER or not (w >= LOWER_WEIGHT).any():
         return 0.0
     # the target's landmarks in the source frame, placed by the face the jaw does not move
-    s, R, t = _similarity(Q[upper], P[upper])
+    s, R = similarity(Q[upper], P[upper])
+    t = P[upper].mean(axis=0) - s * Q[upper].mean(axis=0) @ R.T
     Qs = s * Q[lower] @ R.T + t
     Pl, wl = P[lower], w[lower]
 
