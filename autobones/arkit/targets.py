@@ -188,8 +188,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     method : "deformation" or "copy"
         Deformation transfer, or the copy baseline (:mod:`.copy_baseline`; for comparison).
     timings : dict, optional
-        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``lids`` (one-surface heads), ``folds``,
-        ``eyes``.
+        Filled with seconds: ``correspond``, ``map``, ``factor``, ``solve``, ``lids`` (one-surface heads), ``folds``
+        (the repair and the counts of the record), ``eyes``.
     repair_folds : bool
         Turn back the triangles a shape turns over at weight 1, moving only their vertices
         (:func:`autobones.arkit.folds.unfold_shapes`; ``mouthClose`` judged on top of ``jawOpen``).
@@ -241,14 +241,17 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         X[:, keep] = 0.0
     else:
         raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
-    # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose on top of jawOpen)
+    # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose
+    # on top of jawOpen); rounded first to the float32 the glb stores, so the counts are of what is written
     t = time.perf_counter()
+    X = X.astype(np.float32).astype(np.float64)
     fold_report = {}
     if repair_folds:
-        X, fold_report = unfold_shapes(V, F, X, names, fixed=keep)
+        X, fold_report = unfold_shapes(V, F, X, names, fixed=keep, dtype=np.float32)
     tim["folds"] = time.perf_counter() - t
     t = time.perf_counter()
     by_name = dict(zip(names, X))
+    turned = set()
     if eyes:
         names_b = rig.skeleton.names
         for name in EYE_LOOK:
@@ -259,20 +262,27 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
                 R = eye_turn(name, rig.frame.rotation)
                 by_name[name] = by_name[name].copy()
                 by_name[name][m] = (V[m] - c) @ R.T + c - V[m]
+                turned.add(name)
     targets = {}
     for name in ARKIT_NAMES:
         d = by_name.get(name)
         d = np.zeros_like(V) if d is None else d
         targets[name] = d.astype(np.float32).astype(np.float64)
     tim["eyes"] = time.perf_counter() - t
+    t = time.perf_counter()
+    # each shape alone, as ever; a shape meant on top of another (mouthClose) also judged that way.
+    # The fold repair counted every other shape as written (unless an eyeball turn changed it since)
+    on_top = {n: b for n, b in ON_TOP.items() if n in by_name and b in by_name}
+    known = {n: r["after"] for n, r in fold_report.items() if n not in on_top and n not in turned}
+    alone = flipped_triangles(V, F, {n: targets[n] for n in ARKIT_NAMES if n not in known})
+    alone = {n: known[n] if n in known else alone[n] for n in ARKIT_NAMES}
+    judged = dict(alone)
+    for n, b in on_top.items():
+        judged[n] = (fold_report[n]["after"] if n in fold_report else
+                     int(folded_triangles(V, F, targets[n], targets[b]).sum()))
+    tim["folds"] += time.perf_counter() - t
     if timings is not None:
         timings.update(tim)
-    # each shape alone, as ever; a shape meant on top of another (mouthClose) also judged that way
-    alone = flipped_triangles(V, F, {n: targets[n] for n in ARKIT_NAMES})
-    judged = dict(alone)
-    for n, b in ON_TOP.items():
-        if n in by_name and b in by_name:
-            judged[n] = int(folded_triangles(V, F, targets[n], targets[b]).sum())
     record = {
         "format": "autobones-arkit/1",
         "names": list(ARKIT_NAMES),
@@ -292,7 +302,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         "folds": {
             "rule": "triangles whose normal turns over at weight 1 (each shape alone, but mouthClose on top of "
                     "jawOpen at weight 1, as ARKit drives it), before and after the local fold repair",
-            "on_top_of": {n: b for n, b in ON_TOP.items() if n in by_name and b in by_name},
+            "on_top_of": on_top,
             "repaired": bool(repair_folds),
             "before_repair": ({n: fold_report[n]["before"] if n in fold_report else 0 for n in ARKIT_NAMES}
                               if repair_folds else judged),
