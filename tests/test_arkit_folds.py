@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import autobones
-from autobones.arkit.folds import ON_TOP, folded_triangles, unfold, unfold_shapes
+from autobones.arkit.folds import ON_TOP, folded_each, folded_triangles, unfold, unfold_shapes
 from autobones.arkit.names import ARKIT_NAMES
 from autobones.arkit.targets import arkit_targets
 from autobones.errors import AutobonesError
@@ -47,6 +47,26 @@ def test_folded_triangles_counts_turned_normals_and_judges_on_a_base():
     assert not folded_triangles(V, F, B).any()
     assert not folded_triangles(V, F, D, base=B).any()
     assert not folded_triangles(V, F, 5.0 * np.ones_like(V)).any()  # a translation folds nothing
+
+
+def test_folded_each_agrees_with_one_call_per_shape():
+    V, F = grid()
+    shapes = np.stack([bump(V, np.array([6.0, 6.0]), 2.5), np.zeros_like(V), 5.0 * np.ones_like(V),
+                       bump(V, np.array([3.0, 8.0]), -2.0)])
+    each = folded_each(V, F, shapes, block=7)  # blocks that do not divide the triangle count
+    assert each.shape == (4, len(F))
+    assert each[0].any() and each[3].any() and not each[1:3].any()
+    for D, row in zip(shapes, each):
+        assert (row == folded_triangles(V, F, D)).all()
+
+
+def test_unfold_rounded_to_float32_counts_what_is_stored():
+    V, F = grid()
+    D = bump(V, np.array([6.0, 6.0]), 2.5).astype(np.float32).astype(np.float64)
+    R, rep = unfold(V, F, D, dtype=np.float32)
+    assert rep["before"] > 0 and rep["after"] == 0
+    assert (R.astype(np.float32).astype(np.float64) == R).all()  # stored as is
+    assert rep["after"] == folded_triangles(V, F, R).sum()
 
 
 def test_unfold_removes_the_folds_and_leaves_the_rest_bit_for_bit():
