@@ -131,8 +131,9 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
     t_corr = time.perf_counter() - t0
     t0 = time.perf_counter()
     timings = {}
-    frame = frame_from_landmarks(Vt, Ft, lm_t) if one_surface else None
-    X = deformation_targets(S, D, P, Vt, Ft, lm_t, frame, timings=timings, close_lids=close_lids)
+    frame = frame_from_landmarks(Vt, Ft, lm_t)  # as transfer --arkit: the lip line is looked for on every head
+    X = deformation_targets(S, D, P, Vt, Ft, lm_t, frame if one_surface else None, timings=timings,
+                            close_lids=close_lids, frame=frame)
     t_dt = time.perf_counter() - t0
     t0 = time.perf_counter()
     X0 = X  # as transfer --arkit makes them (the repair is opt-in); X: with the fold repair
@@ -163,11 +164,16 @@ def main(argv=None):
                     help="keep only each head's skin and take it as a one-surface scan (eye surface free, lids closed)")
     ap.add_argument("--no-lids", action="store_true", help="with --one-surface: only set the eye surface free")
     ap.add_argument("--json", help="also write the numbers here")
+    ap.add_argument("--lips", action="store_true",
+                    help="how jawOpen and a few mouth shapes move the lips on the shared heads, with and without "
+                         "the lip line set free")
     ap.add_argument("--fold-heads", action="store_true",
                     help="fold counts of transfer --arkit on the shared heads, goat and robot, before/after the repair")
     args = ap.parse_args(argv)
     if args.fold_heads:
         return fold_heads()
+    if args.lips:
+        return lips()
     S = load_shapes()
     neutral, F = read_obj(os.path.join(ICT, "generic_neutral_mesh.obj"))
     part = mesh_parts(len(neutral), F)
@@ -263,6 +269,44 @@ def fold_heads():
         print(f"| {n} | " + " | ".join(f"{r['before_repair'][n]} -> {r['after_repair'][n]}" for r in recs.values()) + " |")
     print("| all shapes | " + " | ".join(f"{sum(r['before_repair'].values())} -> {sum(r['after_repair'].values())}"
                                         for r in recs.values()) + " |")
+
+
+LIP_SHAPES = ("jawOpen", "mouthFunnel", "mouthLowerDownLeft", "mouthShrugUpper")
+
+
+def lips():
+    """transfer --arkit on each of :data:`FOLD_HEADS` with and without the lip line set free
+    (:func:`autobones.arkit.targets.mouth_fissure`): how jawOpen and a few mouth shapes move the
+    upper and lower lip, beside ICT's own shapes on its own skin, and the folds left."""
+    import autobones
+    from autobones.arkit.targets import lip_motion, mouth_fissure
+
+    data = os.path.join(ROOT, "..", "shared", "data")
+    S = load_shapes()
+    up_src = frame_from_landmarks(S.vertices, S.faces, S.landmarks).rotation[1]
+    print("| head | lip-line triangles | shape | upper | lower | opening | folds left (all shapes) |")
+    print("|---|---:|---|---|---|---|---|")
+    for n in LIP_SHAPES:
+        u, lo, o = lip_motion(S.vertices, S.landmarks, S.deltas[n], up_src)
+        print(f"| ICT's own | - | {n} | {u:.3f} | {lo:.3f} | {o:.3f} | - |")
+    for head, (mesh, lm) in FOLD_HEADS.items():
+        lm = None if lm is None else os.path.join(ROOT if lm.startswith("tests/") else data, lm)
+        rig = autobones.transfer(os.path.join(data, mesh), lm)
+        if not all(k in rig.landmarks for k in ("stomion", "labiale_superius", "labiale_inferius",
+                                                 "cheilion_l", "cheilion_r")):
+            print(f"| {head} | - | (no lip landmarks) | | | | |")
+            continue
+        V = np.asarray(rig.vertices)
+        count = int(mouth_fissure(V, rig.faces, rig.landmarks, rig.frame).sum())
+        runs = {}
+        for free in (False, True):
+            X, rec = arkit_targets(rig, free_lips=free)
+            runs[free] = (X, sum(rec["folds"]["after_repair"].values()))
+        for n in LIP_SHAPES:
+            cells = [lip_motion(V, rig.landmarks, runs[free][0][n], rig.frame.rotation[1]) for free in (False, True)]
+            print(f"| {head} | {count} | {n} | " + " | ".join(
+                f"{a[k]:.3f} -> {b[k]:.3f}" for a, b in [cells] for k in range(3)) +
+                  f" | {runs[False][1]} -> {runs[True][1]} |", flush=True)
 
 
 if __name__ == "__main__":

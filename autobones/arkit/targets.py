@@ -42,6 +42,8 @@ log = logging.getLogger(__name__)
 EYE_TURN_DEG = {"Up": 25.0, "Down": 30.0, "In": 30.0, "Out": 30.0}
 # the eye opening of a one-surface head: the landmarks' quadrilateral grown about its centre
 FISSURE_GROWTH = 1.3
+# the lip line of a one-surface head (:func:`mouth_fissure`): its two ends and middle, then the lips' middles
+MOUTH = ("cheilion_r", "stomion", "cheilion_l", "labiale_superius", "labiale_inferius")
 
 
 def eye_turn(name, frame_rotation):
@@ -105,6 +107,65 @@ def eye_fissures(V, F, landmarks, frame, growth=None):
     return out
 
 
+def mouth_fissure(V, F, landmarks, frame, names=MOUTH):
+    """Triangles of a one-surface head across its lip line: (m,) bool (all False without the landmarks).
+
+    The lip line is the curve through ``cheilion_r``, ``stomion`` and ``cheilion_l`` (a quadratic
+    in the canonical left-right coordinate, for height and depth); a triangle is across it when
+    its corners lie on both sides in height, between the mouth corners, and within a lip's
+    height (``labiale_superius`` to ``labiale_inferius``) of it in depth. On a closed-mouth scan
+    these are the only triangles joining the upper lip to the lower one: held as they are they
+    tie the lips together, and jawOpen moved the menpo3d james scan's upper lip as far as its
+    lower one (0.30 and 0.32-0.43 mouth widths; ICT's own 0.05 and 0.79); set free, 0.085 and
+    0.58-0.62 (``benchmarks/arkit.py --lips``).
+    """
+    if not all(n in landmarks for n in names):
+        return np.zeros(len(F), dtype=bool)
+    r, st, l, up, lo = (frame.to_canonical(np.asarray(landmarks[n], dtype=np.float64)[None])[0] for n in names)
+    if abs(l[0] - r[0]) <= 0 or up[1] <= lo[1]:
+        return np.zeros(len(F), dtype=bool)
+    C = frame.to_canonical(np.asarray(V, dtype=np.float64))
+    xs = np.array([r[0], st[0], l[0]])
+    # the quadratic through the three points by Lagrange's basis (a repeated x gives a straight line)
+    def through(values, x):
+        if len(np.unique(xs)) < 3:
+            return np.interp(x, np.sort(xs[[0, 2]]), values[[0, 2]][np.argsort(xs[[0, 2]])])
+        out = np.zeros_like(x)
+        for i in range(3):
+            j, k = [q for q in range(3) if q != i]
+            out += values[i] * (x - xs[j]) * (x - xs[k]) / ((xs[i] - xs[j]) * (xs[i] - xs[k]))
+        return out
+
+    x = C[:, 0]
+    height = C[:, 1] - through(np.array([r[1], st[1], l[1]]), x)
+    depth = C[:, 2] - through(np.array([r[2], st[2], l[2]]), x)
+    inside = (x > min(r[0], l[0])) & (x < max(r[0], l[0])) & (np.abs(depth) < up[1] - lo[1])
+    h = height[F]
+    return inside[F].all(axis=1) & (h.min(axis=1) < 0) & (h.max(axis=1) > 0)
+
+
+def lip_motion(V, landmarks, D, up):
+    """How a displacement ``D`` (n, 3) moves a head's lips, in mouth widths (cheilion to cheilion).
+
+    The upper lip is sampled at the vertices nearest 10 points from ``stomion`` to
+    ``labiale_superius`` (5 % to 95 %), the lower to ``labiale_inferius``. Returns the upper's and the
+    lower's mean displacement length and the opening: the lower's mean displacement minus the
+    upper's along ``-up`` (``up`` (3,) the head's up, input frame), all divided by the mouth width.
+    ``V``, ``landmarks`` (name -> (3,)) and ``D`` in the same frame and units.
+    """
+    from scipy.spatial import cKDTree
+
+    st, ls, li, cl, cr = (np.asarray(landmarks[k], dtype=np.float64) for k in
+                          ("stomion", "labiale_superius", "labiale_inferius", "cheilion_l", "cheilion_r"))
+    width = max(float(np.linalg.norm(cl - cr)), 1e-300)
+    f = np.linspace(0.05, 0.95, 10)[:, None]
+    tree = cKDTree(np.asarray(V, dtype=np.float64))
+    du = D[tree.query(st + f * (ls - st))[1]]
+    dl = D[tree.query(st + f * (li - st))[1]]
+    return (float(np.linalg.norm(du, axis=1).mean() / width), float(np.linalg.norm(dl, axis=1).mean() / width),
+            float((dl.mean(axis=0) - du.mean(axis=0)) @ -np.asarray(up, dtype=np.float64)) / width)
+
+
 def _in_polygon(X, poly):
     """Points ``X`` (k, 2) inside the closed polygon ``poly`` (p, 2): even-odd ray casting, (k,) bool."""
     inside = np.zeros(len(X), dtype=bool)
@@ -117,7 +178,7 @@ def _in_polygon(X, poly):
 
 
 def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, keep=None, timings=None,
-                        close_lids=True):
+                        close_lids=True, frame=None, free_lips=True):
     """Deformation transfer of a shape set onto a head, lids closed as the source's on a one-surface head.
 
     Parameters
@@ -141,6 +202,12 @@ def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, ke
         Filled with seconds: ``map``, ``factor``, ``solve``, ``lids``.
     close_lids : bool
         False: on a one-surface head only set the eye surface free (for comparison).
+    frame : Frame, optional
+        The head's frame (:class:`autobones.orient.Frame`; ``one_surface`` when that is given):
+        with it the triangles across a closed mouth's lip line are set free (:func:`mouth_fissure`)
+        so the lips can part, on any head (a head whose mouth is open has none).
+    free_lips : bool
+        False: the lip line's triangles held as the rest (for comparison).
 
     Returns
     -------
@@ -155,6 +222,10 @@ def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, ke
         free = eye_fissures(V, F, landmarks, one_surface)
         if close_lids:
             lids = LidClosure().fit(S.vertices, S.faces, S.landmarks, V, F, landmarks)
+    frame = one_surface if frame is None else frame
+    if free_lips and frame is not None:  # nor the triangles joining a closed mouth's lips
+        lips = mouth_fissure(V, F, landmarks, frame)
+        free = lips if free is None else free | lips
     pinned = None if lids is None else lids.vertices_
     dt = DeformationTransfer().fit(S.vertices, S.faces, P, V, F, moving=moving, free=free, pinned=pinned)
     X = dt.transform(D, keep=keep)
@@ -175,7 +246,8 @@ def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, ke
     return X
 
 
-def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_folds=True, **fit_options):
+def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_folds=True, free_lips=True,
+                  **fit_options):
     """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
 
     Parameters
@@ -194,6 +266,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         Turn back the triangles a shape turns over at weight 1, moving only their vertices
         (:func:`autobones.arkit.folds.unfold_shapes`; ``mouthClose`` judged on top of ``jawOpen``).
         False: the shapes as carried (for comparison).
+    free_lips : bool
+        Let the lips of a closed mouth part (:func:`mouth_fissure`); False for comparison.
     **fit_options
         Passed to :func:`dense_correspondence`.
 
@@ -234,7 +308,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     for m in eyes.values():
         keep |= m
     if method == "deformation":
-        X = deformation_targets(S, D, P, V, F, lm, None if eyes else rig.frame, keep=keep, timings=tim)
+        X = deformation_targets(S, D, P, V, F, lm, None if eyes else rig.frame, keep=keep, timings=tim,
+                                frame=rig.frame, free_lips=free_lips)
     elif method == "copy":
         s, R = similarity(np.array([src[n] for n in shared]), np.array([dst[n] for n in shared]))
         X = copy_displacements(S.faces, D, P, V, s, R)
