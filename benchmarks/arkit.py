@@ -61,7 +61,7 @@ from autobones.arkit.folds import unfold_shapes  # noqa: E402
 from autobones.arkit.lids import eye_sides, gap_closure  # noqa: E402
 from autobones.arkit.names import ict_names  # noqa: E402
 from autobones.arkit.shapes import load_shapes  # noqa: E402
-from autobones.arkit.targets import arkit_targets, deformation_targets  # noqa: E402
+from autobones.arkit.targets import CORRESPONDENCE, arkit_targets, deformation_targets  # noqa: E402
 from autobones.geometry.closest import closest_points  # noqa: E402
 from autobones.geometry.topology import mesh_parts  # noqa: E402
 from autobones.io.obj import read_obj  # noqa: E402
@@ -127,7 +127,7 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
     lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
     D = np.stack([S.deltas[n] for n in names])
     t0 = time.perf_counter()
-    P = dense_correspondence(S.vertices, S.faces, Vt, Ft, S.landmarks, lm_t)[0]
+    P = dense_correspondence(S.vertices, S.faces, Vt, Ft, S.landmarks, lm_t, **CORRESPONDENCE)[0]
     t_corr = time.perf_counter() - t0
     t0 = time.perf_counter()
     timings = {}

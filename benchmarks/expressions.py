@@ -271,29 +271,79 @@ def contraction_bounds(model):
     return lo, np.full(len(lo), C_MAX)
 
 
-def _solve_linear(model, X, sel, jaw, lids, lo, hi):
-    """Best contractions for fixed jaw / lids: bounded linear least squares on the unclamped
-    model (``linear_pose``) over the rows ``sel``, via a thin QR. Returns (c, residual norm)."""
+def _bounded_solve(R, qy, yy, lo, hi):
+    """min ||M c - y|| within [lo, hi] from M's thin QR: R (k, k), qy = Q^T y (k,), yy = y . y.
+    Returns (c, residual norm)."""
     import scipy.optimize
 
-    A, b = model.linear_pose(jaw, lids)
-    M = A[:, sel].reshape(len(A), -1).T                  # (3 m, k)
-    y = (X[sel] - b[sel]).ravel()
-    Q, R = np.linalg.qr(M)
-    qy = Q.T @ y
     c = scipy.optimize.lsq_linear(R, qy, bounds=(lo, hi), method="bvls").x
-    r2 = float(np.sum((R @ c - qy) ** 2) + max(y @ y - qy @ qy, 0.0))
+    r2 = float(np.sum((R @ c - qy) ** 2) + max(yy - qy @ qy, 0.0))
     return c, np.sqrt(r2)
 
 
-def fit_rig(model, X, sel, refine=30):
+def _solve_linear(model, X, sel, jaw, lids, lo, hi):
+    """Best contractions for fixed jaw / lids: bounded linear least squares on the unclamped
+    model (``linear_pose``) over the rows ``sel``, via a thin QR. Returns (c, residual norm)."""
+    A, b = model.linear_pose(jaw, lids)
+    M = A[:, sel].reshape(len(A), -1).T                  # (3 m, k)
+    y = (X[sel] - b[sel]).ravel()
+    Q, R = scipy.linalg.qr(M, mode="economic", check_finite=False)   # LAPACK geqrf, as np.linalg.qr, faster here
+    return _bounded_solve(R, Q.T @ y, y @ y, lo, hi)
+
+
+class SharedSolves:
+    """``fit_rig``'s stage-1 solves for many targets on one model, sharing the work.
+
+    The targets are ``base + D[name]`` ((n, 3), input frame) fitted over the rows ``masks[where]``.
+    For a jaw angle and lid amounts, ``linear_pose`` and the thin QR of each mask's design matrix
+    do not depend on the target: they are made once, with Q^T of every target's displacement, and
+    kept; a target that visits the same grid point again (most do: the jaw grid at lids 0 is the
+    same for all, lids are mostly searched at the same jaw) costs a 26-unknown solve. Same answer
+    as ``_solve_linear`` up to rounding. ``solver(name, where)`` is ``fit_rig``'s ``solve``.
+    """
+
+    def __init__(self, model, base, D, masks):
+        self.model, self.masks, self.names = model, masks, list(D)
+        self.lo, self.hi = contraction_bounds(model)
+        self.E = {w: np.stack([np.asarray(D[n], float)[m].ravel() for n in self.names]) for w, m in masks.items()}
+        self.EE = {w: np.einsum("sv,sv->s", E, E) for w, E in self.E.items()}
+        self.base = np.asarray(base, float)
+        self.cache, self.misses, self.calls = {}, 0, 0
+
+    def _entry(self, jaw, lids):
+        key = (round(float(jaw), 9), tuple(np.round(np.asarray(lids, float), 9)))
+        if key not in self.cache:
+            self.misses += 1
+            A, b = self.model.linear_pose(jaw, lids)
+            ent = {}
+            for w, sel in self.masks.items():
+                M = A[:, sel].reshape(len(A), -1).T
+                Q, R = scipy.linalg.qr(M, mode="economic", check_finite=False)
+                y0 = (self.base[sel] - b[sel]).ravel()
+                ent[w] = (R, Q.T @ y0, Q.T @ self.E[w].T, y0 @ y0, self.E[w] @ y0)
+            self.cache[key] = ent
+        return self.cache[key]
+
+    def solver(self, name, where):
+        s = self.names.index(name)
+
+        def solve(jaw, lids):
+            self.calls += 1
+            R, qy0, qE, y0y0, Ey0 = self._entry(jaw, lids)[where]
+            return _bounded_solve(R, qy0 + qE[:, s], y0y0 + 2 * Ey0[s] + self.EE[where][s], self.lo, self.hi)
+
+        return solve
+
+
+def fit_rig(model, X, sel, refine=30, solve=None):
     """Rig parameters reproducing the target positions ``X`` (n, 3) over the vertices ``sel``.
 
     Stage 1 (variable projection on a grid): for a jaw angle and lid amounts the pose is affine in
     the 26 contractions (skull clamp aside), solved by bounded linear least squares; the jaw is
     searched on a 2-degree grid (lids 0), then each of the 4 lids on a 0.1 grid in turn (the
     others held); a second such sweep (the jaw grid again with those lids, the lids again),
-    then the jaw on a 0.5-degree grid around its best.
+    then the jaw on a 0.5-degree grid around its best. ``solve(jaw, lids) -> (c, residual norm)``
+    replaces that solve (``SharedSolves.solver``; default ``_solve_linear`` on ``X``).
     Stage 2: ``scipy.optimize.least_squares`` (trf, finite differences, ``refine`` evaluations
     at most) over all 31 parameters of the full nonlinear pose (``pose_parameters``, skull clamp
     included), from stage 1, within the same bounds. Returns (contractions, jaw, lids, info).
@@ -301,20 +351,23 @@ def fit_rig(model, X, sel, refine=30):
     import scipy.optimize
 
     lo, hi = contraction_bounds(model)
+    if solve is None:
+        def solve(j, l):
+            return _solve_linear(model, X, sel, j, l, lo, hi)
     lids = np.zeros(4)
     jaw = 0.0
     for sweep in range(2):
-        jaw = min((_solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in JAW_GRID)[1]
+        jaw = min((solve(j, lids)[1], j) for j in JAW_GRID)[1]
         for q in range(4):
             trials = []
             for a in LID_GRID:
                 l2 = lids.copy()
                 l2[q] = a
-                trials.append((_solve_linear(model, X, sel, jaw, l2, lo, hi)[1], a))
+                trials.append((solve(jaw, l2)[1], a))
             lids[q] = min(trials)[1]
     fine = np.clip(jaw + np.arange(-2.0, 2.01, 0.5), *JAW_BOUNDS)
-    jaw = min((_solve_linear(model, X, sel, j, lids, lo, hi)[1], j) for j in fine)[1]
-    c, _ = _solve_linear(model, X, sel, jaw, lids, lo, hi)
+    jaw = min((solve(j, lids)[1], j) for j in fine)[1]
+    c, _ = solve(jaw, lids)
     x0 = np.r_[c, jaw, lids]
     k = len(c)
 
@@ -391,9 +444,21 @@ def region_scores(Y, X, V, masks):
     return out
 
 
+def rig_head(name, head, landmarks):
+    """``autobones.transfer`` of ``head`` (path or (V, F)) with ``landmarks`` (path or dict), then
+    ``ExpressionModel().fit``. Returns (rig, model, correspondence (n_generic, 3), region masks)."""
+    from autobones.expressions.model import ExpressionModel
+
+    t = time.perf_counter()
+    det = {}
+    rig = autobones.transfer(head, landmarks, details=det)
+    model = ExpressionModel().fit(rig)
+    print(f"rigged {name}: transfer + model fit {time.perf_counter() - t:.1f} s", flush=True)
+    return rig, model, det["correspondence"], region_masks(rig, model.skin_)
+
+
 def full_rig_benchmark(source="identity002", targets=("identity000", "identity001"), refine=30):
     """Parts 1 and 2 of the proof; prints its table and returns the lines."""
-    from autobones.expressions.model import ExpressionModel
     from autobones.rig_transfer.pipeline import load_generic
 
     N0, F = load_mesh(NEUTRAL)
@@ -405,13 +470,8 @@ def full_rig_benchmark(source="identity002", targets=("identity000", "identity00
     gF = np.asarray(load_generic().faces)
     heads = {}
     for name in (source, *targets):
-        t = time.perf_counter()
-        det = {}
-        rig = autobones.transfer(str(ICT / f"{name}.obj"), str(ICT / f"{name}.landmarks.json"), details=det)
-        assert np.array_equal(rig.faces, F), f"{name}: not the ICT topology"
-        model = ExpressionModel().fit(rig)
-        heads[name] = (rig, model, det["correspondence"], region_masks(rig, model.skin_))
-        print(f"rigged {name}: transfer + model fit {time.perf_counter() - t:.1f} s", flush=True)
+        heads[name] = rig_head(name, str(ICT / f"{name}.obj"), str(ICT / f"{name}.landmarks.json"))
+        assert np.array_equal(heads[name][0].faces, F), f"{name}: not the ICT topology"
     cols = ["all", "skin", "parts"] + [r for r, _ in REGIONS]
     hdr = "| identity | method | expression | " + " | ".join(cols) + " |"
     lines = [hdr, "|" + "---|" * (len(cols) + 3)]
@@ -474,16 +534,186 @@ def full_rig_benchmark(source="identity002", targets=("identity000", "identity00
     return lines
 
 
+# ---------------------------------------------------------------- ICT's 57 shapes (part "ict57", issue #16 item 3)
+ICT57_TARGETS = {"fit skin mean": 0.80, "fit skin every shape": 0.65, "fit skin of the four": 0.80,
+                 "transfer skin mean": 0.70}
+FOUR = ("jawOpen", "mouthSmile_L", "eyeBlink_L", "browInnerUp_L")
+
+
+def _arkit_bench():
+    """benchmarks/arkit.py as a module (its ``remesh``, ``carry``), loaded by path."""
+    import importlib.util
+    import sys
+
+    if "_bench_arkit" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("_bench_arkit", Path(__file__).with_name("arkit.py"))
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        sys.modules["_bench_arkit"] = mod
+    return sys.modules["_bench_arkit"]
+
+
+def ict57_shapes():
+    """(ICT expression name, AU label) for every row of the definitions' ``au_arkit`` table, both
+    halves where ICT splits a shape, in the table's order."""
+    from autobones.expressions.definitions import au_arkit_table
+
+    return [(n, "/".join(f"AU{a}" for a in row["au"])) for row in au_arkit_table() for n in row["ict"]]
+
+
+def remeshed_identity(name, z, N0, F, part, lm_neutral):
+    """ICT identity ``name`` remeshed, with its landmarks and where its truth is read, as
+    benchmarks/arkit.py's ``run_identity`` does: the identity is ``N0 + identity`` (cm); ICT's
+    neutral landmarks go to their barycentric place on it, then to the closest remeshed point;
+    each remeshed vertex is carried to its closest point on the identity in the ICT part its
+    remeshed part came from (the part most of its vertices are closest to).
+    Returns (Vt (n, 3), Ft (m, 3), landmarks dict, tf (n,) ICT face, tb (n, 3) barycentric)."""
+    from autobones.geometry.closest import closest_points
+
+    ak = _arkit_bench()
+    Vi = N0 + z[f"identity/{name}"].astype(np.float64)
+    lf, lb = ak.carry(np.array(list(lm_neutral.values())), N0, F, part)
+    lm = {n: (Vi[F[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm_neutral, lf, lb)}
+    Vt, Ft = ak.remesh(Vi, F)
+    tpart = mesh_parts(len(Vt), Ft)
+    f0, _ = ak.carry(Vt, Vi, F, part)
+    votes = np.zeros((tpart.max() + 1, part.max() + 1))
+    np.add.at(votes, (tpart, part[F[f0, 0]]), 1)
+    tf, tb = ak.carry(Vt, Vi, F, part, np.argmax(votes, axis=1)[tpart])
+    _, lfv, lbv, _ = closest_points(np.array(list(lm.values())), Vt, Ft)
+    lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
+    return Vt, Ft, lm_t, tf, tb
+
+
+def ict57_benchmark(source="identity002", targets=("identity000", "identity001"), refine=30, shapes=None):
+    """Issue #16 item 3: every ICT shape the AU <-> ARKit table maps, fitted by the full rig on
+    ``source`` (ICT's triangulation) and the parameters applied on ``targets`` remeshed, beside
+    the copy through the correspondence. Prints the table and returns the per-shape scores."""
+    from autobones.rig_transfer.pipeline import load_generic
+
+    t_all = time.perf_counter()
+    rows = ict57_shapes()
+    if shapes:
+        rows = [r for r in rows if r[0] in shapes]
+        if not rows:
+            raise SystemExit(f"--shapes: none of {shapes} is in the au_arkit table")
+    z = np.load(ICT / "ict_facekit_shapes.npz")
+    N0, F = load_mesh(NEUTRAL)
+    assert np.abs(N0 - z["neutral"]).max() < 1e-4, "the npz's neutral is not generic_neutral_mesh.obj"
+    part = mesh_parts(len(N0), F)
+    lm_neutral = {n: np.asarray(v, float) for n, v in json.loads(LANDMARKS.read_text())["landmarks"].items()}
+    E = {n: z[f"expression/{n}"].astype(np.float64) for n, _ in rows}
+    gF = np.asarray(load_generic().faces)
+
+    rig_s, m_s, P_s, masks_s = rig_head(source, str(ICT / f"{source}.obj"), str(ICT / f"{source}.landmarks.json"))
+    assert np.array_equal(rig_s.faces, F), f"{source}: not the ICT topology"
+    Vs = rig_s.vertices
+    heads = {}
+    for name in targets:
+        t = time.perf_counter()
+        Vt, Ft, lm_t, tf, tb = remeshed_identity(name, z, N0, F, part, lm_neutral)
+        print(f"remeshed {name}: {len(Vt)} vertices, {len(Ft)} triangles, {time.perf_counter() - t:.1f} s", flush=True)
+        rig_t, m_t, P_t, masks_t = rig_head(f"{name} remeshed", (Vt, Ft), lm_t)
+        heads[name] = (Vt, m_t, P_t, masks_t, F[tf], tb)
+
+    shared = SharedSolves(m_s, Vs, E, {w: masks_s[w] for w in ("skin", "all")})
+    # self-check: the shared solve is _solve_linear's (same QR, target split into base + displacement)
+    n0 = rows[0][0]
+    for w in ("skin", "all"):
+        a = shared.solver(n0, w)(8.0, np.array([0.3, 0, 0, 0.1]))
+        b = _solve_linear(m_s, Vs + E[n0], masks_s[w], 8.0, np.array([0.3, 0, 0, 0.1]), shared.lo, shared.hi)
+        assert abs(a[1] - b[1]) <= 1e-6 * max(b[1], 1e-12) and np.allclose(a[0], b[0], atol=1e-6), (w, a[1], b[1])
+    print("self-check passed: shared stage-1 solves equal _solve_linear", flush=True)
+    res = {}
+    for n, au in rows:
+        t = time.perf_counter()
+        Xs = Vs + E[n]
+        r = {"au": au}
+        truth, copies = {}, {}
+        for name, (Vt, m_t, P_t, masks_t, tri, tb) in heads.items():
+            truth[name] = Vt + np.einsum("vcd,vc->vd", E[n][tri], tb)   # the truth at each remeshed vertex
+            copies[name] = Vt + copy_through(P_s, P_t, gF, Vs, F, E[n], Vt)
+        for where in ("skin", "all"):
+            sel = masks_s[where]
+            c, jaw, lids, info = fit_rig(m_s, Xs, sel, refine=refine, solve=shared.solver(n, where))
+            r["fit", where] = explained(m_s.pose_parameters(c, jaw, lids), Xs, Vs, sel)
+            tr, cp = [], []
+            for name, (Vt, m_t, P_t, masks_t, tri, tb) in heads.items():
+                tr.append(explained(m_t.pose_parameters(c, jaw, lids), truth[name], Vt, masks_t[where]))
+                cp.append(explained(copies[name], truth[name], Vt, masks_t[where]))
+                r["transfer", where, name] = tr[-1]
+            r["transfer", where], r["copy", where] = float(np.mean(tr)), float(np.mean(cp))
+            if where == "skin":
+                r["params"] = (jaw, lids, info)
+        res[n] = r
+        jaw, lids, info = r["params"]
+        print(f"  {n} ({au}): {time.perf_counter() - t:.1f} s ({shared.misses} grid points made for "
+              f"{shared.calls} solves so far); skin fit {fmt(r['fit', 'skin'])} (jaw {jaw:.1f} deg, "
+              f"lids {np.array2string(lids, precision=2)}, residual {info['stage1']:.3f} -> {info['stage2']:.3f}), "
+              f"all {fmt(r['fit', 'all'])}; transfer skin "
+              + " / ".join(fmt(r["transfer", "skin", h]) for h in heads) + f"; copy-through skin {fmt(r['copy', 'skin'])}",
+              flush=True)
+
+    cols = [("fit skin", ("fit", "skin")), ("fit all", ("fit", "all")), ("transfer skin", ("transfer", "skin")),
+            ("transfer all", ("transfer", "all")), ("copy-through skin", ("copy", "skin")),
+            ("copy-through all", ("copy", "all"))]
+    lines = ["| shape | AU | " + " | ".join(c for c, _ in cols) + " | with tissue pass |",
+             "|---|---|" + "---|" * (len(cols) + 1)]
+    for n, r in res.items():
+        lines.append(f"| {n} | {r['au']} | " + " | ".join(fmt(r[k]) for _, k in cols) + " | - |")
+    M = {c: np.array([r[k] for r in res.values()]) for c, k in cols}
+    lines.append(f"| **mean of {len(res)}** | | " + " | ".join(fmt(np.nanmean(M[c])) for c, _ in cols) + " | - |")
+    names = list(res)
+    lines.append("| **worst** | | " + " | ".join(f"{fmt(np.nanmin(M[c]))} ({names[int(np.nanargmin(M[c]))]})"
+                                                  for c, _ in cols) + " | - |")
+    print(f"\nICT's shapes mapped to action units (generic_rig/expressions.json au_arkit), explained %: fit on "
+          f"{source} (ICT's triangulation), transfer = {source}'s parameters on "
+          + " and ".join(f"{h} remeshed" for h in heads) + " (mean of the two), copy-through = the displacement "
+          "copied through the transfer's dense correspondence (mean of the two)\n")
+    print("\n".join(lines))
+    print("\nnotes: 'skin' columns are fitted and scored on the skin (largest part), 'all' columns on every "
+          "vertex (eyeballs, teeth, lashes, shells too). 'with tissue pass' is '-': the tissue pass (issue #16 "
+          "item 1) is not built yet, so there are no numbers with it. Per remeshed identity, transfer skin: "
+          + "; ".join(f"{h} mean {fmt(np.mean([r['transfer', 'skin', h] for r in res.values()]))}" for h in heads))
+    fs, ts = M["fit skin"], M["transfer skin"]
+    four = [n for n in FOUR if n in res]
+    checks = [
+        (f"fit skin mean >= 80 % over the {len(res)} mapped shapes", np.nanmean(fs) >= 0.80, fmt(np.nanmean(fs))),
+        ("every shape's fit skin >= 65 %", np.nanmin(fs) >= 0.65,
+         ", ".join(f"{n} {fmt(r['fit', 'skin'])}" for n, r in res.items() if r["fit", "skin"] < 0.65) or "none below"),
+        ("jawOpen, mouthSmile_L, eyeBlink_L, browInnerUp_L fit skin each >= 80 %",
+         bool(four) and all(res[n]["fit", "skin"] >= 0.80 for n in four),
+         ", ".join(f"{n} {fmt(res[n]['fit', 'skin'])}" for n in four) or "not run"),
+        ("transfer to remeshed identities, skin mean >= 70 %", np.nanmean(ts) >= 0.70, fmt(np.nanmean(ts))),
+    ]
+    print("\ntargets (issue #16 item 3; judged on the skin columns):")
+    for what, ok, val in checks:
+        print(f"  {'met    ' if ok else 'NOT met'}  {what}: {val}")
+    print(f"  (on all vertices: fit mean {fmt(np.nanmean(M['fit all']))}, transfer mean "
+          f"{fmt(np.nanmean(M['transfer all']))}; copy-through skin mean {fmt(np.nanmean(M['copy-through skin']))})")
+    print(f"\nict57: {time.perf_counter() - t_all:.1f} s in all ({len(res)} shapes x 2 fits, refine {refine}); "
+          f"{datetime.date.today()}, {machine()}")
+    return res
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
     ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
-    ap.add_argument("--part", choices=["all", "rig", "bones"], default="all",
-                    help="rig: the full-rig fit and transfer (parts 1, 2) only; bones: bones alone (part 3) only")
+    ap.add_argument("--part", choices=["all", "rig", "bones", "ict57"], default="all",
+                    help="rig: the full-rig fit and transfer (parts 1, 2) only; bones: bones alone (part 3) only; "
+                         "ict57: every ICT shape the AU <-> ARKit table maps, transferred to remeshed identities "
+                         "(not part of 'all')")
+    ap.add_argument("--identities", nargs="+", default=["identity000", "identity001"],
+                    help="ict57: the ICT identities the fit is transferred to (remeshed)")
+    ap.add_argument("--shapes", nargs="+", help="ict57: only these ICT shapes (default: every mapped one)")
     ap.add_argument("--refine", type=int, default=30,
                     help="full rig: least_squares evaluations of the nonlinear refinement (0: grid + linear only)")
     args = ap.parse_args()
     sweeps = 0 if args.quick else args.sweeps
+    if args.part == "ict57":
+        ict57_benchmark(targets=tuple(args.identities), refine=args.refine, shapes=args.shapes)
+        return
     if args.part in ("all", "rig"):
         full_rig_benchmark(refine=args.refine)
         print()

@@ -9,7 +9,7 @@ from autobones.arkit.deformation_transfer import DeformationTransfer
 from autobones.arkit.lids import LidClosure, canthal_parameter, eye_sides, gap_closure, margin_points
 from autobones.arkit.names import ARKIT_NAMES
 from autobones.arkit.shapes import load_shapes
-from autobones.arkit.targets import arkit_targets, lip_motion, mouth_fissure
+from autobones.arkit.targets import CORRESPONDENCE, arkit_targets, lip_motion, mouth_fissure
 from autobones.orient import Frame
 from shared_data import data
 
@@ -135,13 +135,17 @@ def test_lids_change_only_the_shapes_that_move_lids(james):
                                    free=eye_fissures(V, F, james.landmarks, james.frame)
                                    | mouth_fissure(V, F, james.landmarks, james.frame))
     X = dt.transform(D)
-    # the gradients alone close james's right lids as ICT's close (vertically 88 %), not its left (33 %)
-    assert lc.needed(D, X).tolist() == [True, False]
+    # the gradients alone leave james's left lids apart (33 % closed vertically); the right ones close
+    # 0.8 of what ICT's do or a little less, depending on the correspondence's schedule (88 % vertically
+    # with transfer's, pinned with the ARKit set's lighter one)
+    assert lc.needed(D, X)[0]
     tol = 1e-5 * james.frame.size
+    eye = np.linalg.norm(np.subtract(james.landmarks["exocanthion_l"], james.landmarks["endocanthion_l"]))
     repaired = james.arkit["folds"]["before_repair"]  # the fold repair changed these (the lip line's folds)
     for j, n in enumerate(names):
         err = np.abs(X[j] - james.arkit_targets[n]).max()
-        assert (err > 0.01 * james.frame.size) if n == "eyeBlinkLeft" else (moving[j] or repaired[n] or err < tol), (n, err)
+        # the pinned solve moves the left upper lid by a few percent of the eye's width or more (6.6 % measured)
+        assert (err > 0.04 * eye) if n == "eyeBlinkLeft" else (moving[j] or repaired[n] or err < tol), (n, err)
 
 
 def test_a_head_whose_lids_close_by_themselves_is_left_alone():
@@ -159,7 +163,7 @@ def _correspondence(rig, S):
 
     shared = [n for n in S.landmarks if n in rig.landmarks]
     return dense_correspondence(S.vertices, S.faces, rig.vertices, rig.faces, {n: S.landmarks[n] for n in shared},
-                                {n: np.asarray(rig.landmarks[n], dtype=float) for n in shared})[0]
+                                {n: np.asarray(rig.landmarks[n], dtype=float) for n in shared}, **CORRESPONDENCE)[0]
 
 
 def test_mouth_fissure_is_the_row_of_triangles_across_the_lip_line():

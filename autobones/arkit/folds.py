@@ -112,7 +112,7 @@ def _signed_areas(X, F, T, unit_normals):
     return 0.5 * np.einsum("ij,ij->i", unit_normals[T], cross_rows(x1 - x0, x2 - x0))
 
 
-def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=1000, rest_normals=None, dtype=None,
+def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=3000, rest_normals=None, dtype=None,
            folded=None, context=None):
     """Move the vertices of the triangles a displacement turns over, as little as will turn them back.
 

@@ -139,3 +139,43 @@ def parse_au_key(key):
     if key[-1:] in ("L", "R"):
         return key, key[:-1], key[-1].lower()
     return key, key, None
+
+
+def au_arkit_table(doc=None):
+    """The definitions' ``au_arkit`` table: FACS action units and the ICT-FaceKit / ARKit shapes
+    that show them (issue #16 item 3; goes beyond the seeds). Not used to pose the model.
+
+    Parameters
+    ----------
+    doc : dict, str, path or None
+        Expression definitions (anything :func:`load_expressions` takes; None: the packaged file).
+
+    Returns
+    -------
+    list of dict
+        One new dict per row, in the file's order: ``au`` (list of int, FACS numbers; two where one
+        shape stands for both, e.g. jawOpen for AU26/27), ``facs`` (list of str, their FACS names),
+        ``ict`` (list of str, ICT-FaceKit expression names, ``_L`` / ``_R`` where ICT splits the
+        shape), ``arkit`` (list of str, ARKit ``BlendShapeLocation`` names) and ``source`` (str).
+
+    Raises AutobonesError when the section is missing or a row lacks one of those keys or has
+    an empty list.
+    """
+    doc = load_expressions(doc)
+    table = doc.get("au_arkit")
+    rows = table.get("rows") if isinstance(table, dict) else None
+    if not isinstance(rows, list):
+        raise AutobonesError("expression definitions: the 'au_arkit' section (with its 'rows') is missing")
+    out = []
+    for i, row in enumerate(rows):
+        try:
+            rec = {"au": [int(a) for a in row["au"]], "facs": [str(n) for n in row["facs"]],
+                   "ict": [str(n) for n in row["ict"]], "arkit": [str(n) for n in row["arkit"]],
+                   "source": str(row["source"])}
+        except (KeyError, TypeError, ValueError) as exc:
+            raise AutobonesError(f"expression definitions: au_arkit row {i} is malformed ({exc!r})") from None
+        if not (rec["au"] and rec["ict"] and rec["arkit"]) or len(rec["facs"]) != len(rec["au"]):
+            raise AutobonesError(f"expression definitions: au_arkit row {i} needs au, facs (one name per AU), "
+                                 "ict and arkit names")
+        out.append(rec)
+    return out
