@@ -174,6 +174,18 @@ def test_blender_imports_the_52_shape_keys_by_name(james, tmp_path):
     assert rep["keys"]["jawOpen"]["max_blender_displacement"] > 0
 
 
+def test_transfer_fits_the_shape_sets_correspondence_beside_its_own_to_the_same_shapes():
+    # transfer --arkit fits the shape set onto the head in a second thread while it fits the generic rig;
+    # the shapes are those arkit_targets makes afterwards on the same rig, bit for bit
+    from autobones.arkit.targets import arkit_targets
+
+    both = autobones.transfer(None, arkit=True)
+    after, record = arkit_targets(autobones.transfer(None))
+    assert both.arkit["landmarks_used"] == record["landmarks_used"]
+    assert all(np.array_equal(after[n], both.arkit_targets[n]) for n in ARKIT_NAMES)
+    assert np.abs(both.arkit_targets["jawOpen"]).max() > 0
+
+
 def test_eyeballs_turn_for_eye_look_and_stay_still_otherwise(ict_rig):
     from autobones.arkit.targets import eyeball_vertices
 

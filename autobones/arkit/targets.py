@@ -251,8 +251,45 @@ def deformation_targets(shapes, deltas, P, V, F, landmarks, one_surface=None, ke
     return X
 
 
+def rig_shape_set(rig_option):
+    """The shape set of a rig folder (``rig.options['rig']``, a transfer's ``--rig``) when ``build-rig
+    --shapes`` gave it one, else the packaged ICT-FaceKit set (:func:`load_shapes`)."""
+    from .studio import rig_shapes_folder
+
+    return load_shapes(rig_shapes_folder(rig_option))
+
+
+def shared_landmarks(shapes, landmarks):
+    """Names of the shape set's landmarks the head also has (the set's order); an error below
+    :data:`MIN_LANDMARKS`."""
+    shared = [n for n in shapes.landmarks if n in landmarks]
+    if len(shared) < MIN_LANDMARKS:
+        raise AutobonesError(f"ARKit shapes: the rig has {len(shared)} landmarks shared with the shape set "
+                             f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} are needed "
+                             "(make the rig with autobones transfer)")
+    return shared
+
+
+def shape_correspondence(shapes, V, F, landmarks, **fit_options):
+    """Each vertex of the shape set's skin on the head: ``P`` (n_s, 3) float64 (head frame and units) and
+    the landmark names it was fitted on.
+
+    :func:`autobones.rig_transfer.correspondence.dense_correspondence` of ``shapes`` (a ShapeSet) onto
+    ``V`` (n, 3), ``F`` (m, 3) from the landmarks both have (``landmarks``: name -> (3,), head frame),
+    with :data:`CORRESPONDENCE` and then ``fit_options``. Depends only on the head and its
+    landmarks: ``transfer --arkit`` runs it beside its own fit of the generic rig.
+    """
+    from ..rig_transfer.correspondence import dense_correspondence
+
+    shared = shared_landmarks(shapes, landmarks)
+    src = {n: shapes.landmarks[n] for n in shared}
+    dst = {n: np.asarray(landmarks[n], dtype=np.float64) for n in shared}
+    P = dense_correspondence(shapes.vertices, shapes.faces, V, F, src, dst, **{**CORRESPONDENCE, **fit_options})[0]
+    return P, shared
+
+
 def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_folds=True, free_lips=True,
-                  **fit_options):
+                  correspondence=None, **fit_options):
     """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
 
     Parameters
@@ -273,6 +310,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         False: the shapes as carried (for comparison).
     free_lips : bool
         Let the lips of a closed mouth part (:func:`mouth_fissure`); False for comparison.
+    correspondence : (n_s, 3) float, optional
+        :func:`shape_correspondence`'s ``P`` for this rig and set, when already computed.
     **fit_options
         Passed to :func:`dense_correspondence`, over :data:`CORRESPONDENCE`.
 
@@ -287,24 +326,16 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         :mod:`.folds`: triangles turned over before and after it, ``mouthClose`` judged on top of
         ``jawOpen``), ``max_displacement`` (mesh units).
     """
-    from ..rig_transfer.correspondence import dense_correspondence
-
-    if shapes is None:  # a rig folder built with a studio's own set (build-rig --shapes) carries it
-        from .studio import rig_shapes_folder
-
-        shapes = load_shapes(rig_shapes_folder((getattr(rig, "options", None) or {}).get("rig")))
-    S = shapes
+    S = rig_shape_set((getattr(rig, "options", None) or {}).get("rig")) if shapes is None else shapes
     lm = rig.landmarks or {}
-    shared = [n for n in S.landmarks if n in lm]
-    if len(shared) < MIN_LANDMARKS:
-        raise AutobonesError(f"ARKit shapes: the rig has {len(shared)} landmarks shared with the shape set "
-                             f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} are needed "
-                             "(make the rig with autobones transfer)")
     V, F = np.asarray(rig.vertices, dtype=np.float64), np.asarray(rig.faces, dtype=np.int64)
     t = time.perf_counter()
-    src = {n: S.landmarks[n] for n in shared}
-    dst = {n: np.asarray(lm[n], dtype=np.float64) for n in shared}
-    P = dense_correspondence(S.vertices, S.faces, V, F, src, dst, **{**CORRESPONDENCE, **fit_options})[0]
+    if correspondence is None:
+        P, shared = shape_correspondence(S, V, F, lm, **fit_options)
+    else:
+        P, shared = np.asarray(correspondence, dtype=np.float64), shared_landmarks(S, lm)
+        if P.shape != S.vertices.shape:
+            raise AutobonesError(f"ARKit shapes: {len(P)} corresponding points for the shape set's {len(S.vertices)} vertices")
     tim = {"correspond": time.perf_counter() - t}
     names = S.names
     D = np.stack([S.deltas[n] for n in names])
@@ -316,7 +347,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         X = deformation_targets(S, D, P, V, F, lm, None if eyes else rig.frame, keep=keep, timings=tim,
                                 frame=rig.frame, free_lips=free_lips)
     elif method == "copy":
-        s, R = similarity(np.array([src[n] for n in shared]), np.array([dst[n] for n in shared]))
+        s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm[n] for n in shared], dtype=np.float64))
         X = copy_displacements(S.faces, D, P, V, s, R)
         X[:, keep] = 0.0
     else:

@@ -1,5 +1,6 @@
 """A welded, and for large meshes coarser, copy of a mesh for solves and queries whose answer is
 smooth at the coarse scale (bone heat, inside tests, closest surface points)."""
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,18 +94,30 @@ def decimate_parts(V, F, max_vertices, min_part_vertices=500, quadric=True):
 PRECLUSTER = 8
 
 
+# fast_simplification keeps its mesh in process-global arrays: one decimation at a time in a process
+# (transfer --arkit fits two correspondences, each with a decimated coarse copy, in two threads)
+_SIMPLIFY = threading.Lock()
+
+
+def quadric_simplify(V, F, reduction, agg=7):
+    """``fast_simplification.simplify`` (Garland & Heckbert 1997 quadrics) of ``V`` (n, 3), ``F`` (m, 3)
+    with ``target_reduction=reduction``, one call at a time: (Vd (k, 3), Fd (mk, 3)) as it returns them."""
+    import fast_simplification
+
+    with _SIMPLIFY:
+        return fast_simplification.simplify(V, F, target_reduction=reduction, agg=agg)
+
+
 def _simplify(V, F, reduction):
     """``fast_simplification`` of one part (V (n, 3), F (m, 3)) by ``reduction`` of its vertices ->
     (Vd, Fd int64). Not threaded: the library keeps its mesh in process-global arrays."""
-    import fast_simplification
-
     target = (1.0 - reduction) * len(V)
     if len(V) > PRECLUSTER * target:
         V, F = cluster_vertices(V, F, PRECLUSTER * target)
         reduction = max(0.0, 1.0 - target / max(len(V), 1))
     # aggressiveness 9 (the library's default is 7): a third faster on scans, and the heat weights on
     # the 134k scan's proxy are unchanged to the digits benchmarks/place.py reports against the exact solve
-    Vd, Fd = fast_simplification.simplify(V, F.astype(np.int32), target_reduction=reduction, agg=9)
+    Vd, Fd = quadric_simplify(V, F.astype(np.int32), reduction, agg=9)
     return np.asarray(Vd, dtype=np.float64), np.asarray(Fd, dtype=np.int64)
 
 

@@ -107,6 +107,7 @@ from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import triangle_normals, vertex_normals
+from ..geometry.proxy import quadric_simplify
 from ..geometry.rotations import axis_turn, rotate_between
 from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
 from ..geometry.validate import mesh_arrays
@@ -227,12 +228,12 @@ def _onto_rim(X, j, V, nb):
 def _decimate(V, F, count):
     """Quadric-error decimation of ``(V, F)`` to about ``count`` vertices (fast_simplification, else libigl)."""
     try:
-        import fast_simplification
+        import fast_simplification  # noqa: F401
     except ImportError:  # pragma: no cover - libigl's edge collapse, slower and a little less accurate
         import igl
         Vc, Fc = igl.decimate(V, F, max(4, int(len(F) * count / len(V))))[:2]
         return np.asarray(Vc, dtype=np.float64), np.asarray(Fc, dtype=np.int64)
-    Vc, Fc = fast_simplification.simplify(V.astype(np.float32), F.astype(np.int32), target_reduction=1.0 - count / len(V))
+    Vc, Fc = quadric_simplify(V.astype(np.float32), F.astype(np.int32), 1.0 - count / len(V))
     return np.asarray(Vc, dtype=np.float64), np.asarray(Fc, dtype=np.int64)
 
 

@@ -180,6 +180,19 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
             src = {n: mirror[n] for n in shared}
         lap("generic_landmarks")
     dst = {n: lm[n] for n in shared}
+    rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
+    pending = None
+    if arkit:
+        # the ARKit shape set's own correspondence needs only the head and its landmarks: fitted on the
+        # second core while this thread fits the generic rig (most of both runs outside the GIL)
+        from concurrent.futures import ThreadPoolExecutor
+
+        from ..arkit.targets import rig_shape_set, shape_correspondence
+
+        shapes = rig_shape_set(rig_option)
+        pool = ThreadPoolExecutor(1)
+        pending = pool.submit(shape_correspondence, shapes, V, F, lm)
+        pool.shutdown(wait=False)  # the worker ends with its one task
     fit_timings = {}
     if "jaw" not in fit_options:
         # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
@@ -210,7 +223,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",
-               "rig": "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object",
+               "rig": rig_option,
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3)}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
@@ -224,7 +237,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     if arkit:
         from ..arkit.targets import arkit_targets
 
-        out.arkit_targets, out.arkit = arkit_targets(out)
+        out.arkit_targets, out.arkit = arkit_targets(out, shapes=shapes, correspondence=pending.result()[0])
         out.options["arkit"] = True
         lap("arkit")
     return out
