@@ -66,17 +66,23 @@ def folded_triangles(V, F, D, base=None, rest_normals=None):
 def folded_each(V, F, deltas, rest_normals=None, block=1024):
     """:func:`folded_triangles` of every displacement of ``deltas`` (k, n, 3): (k, m) bool.
 
-    All shapes at once, in blocks of ``block`` triangles that stay in cache: on a 27k-vertex
-    head about 4x faster than one call per shape (which is memory-bound).
+    All shapes at once, in blocks of ``block`` triangles that stay in cache, first in float32
+    (the test is memory-bound: half the bytes), then in float64 for the triangles whose float32
+    test is not clear by a wide margin (signed area within 1e-4 of the rest area's square, far
+    above float32's round-off), so the answer is :func:`folded_triangles`'s exactly.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     rest = triangle_normals(V, F) if rest_normals is None else rest_normals
+    deltas = np.asarray(deltas, dtype=np.float64)
     k = len(deltas)
-    X = np.transpose(np.asarray(deltas, dtype=np.float64), (1, 2, 0)) + V[:, :, None]  # (n, 3, k)
+    X = (np.transpose(deltas, (1, 2, 0)) + V[:, :, None]).astype(np.float32)  # (n, 3, k)
+    rest32 = rest.astype(np.float32)
+    margin = (1e-4 * np.einsum("ij,ij->i", rest, rest)).astype(np.float32)
     out = np.empty((len(F), k), dtype=bool)
+    unsure = []
     for s in range(0, len(F), block):
-        f, r = F[s:s + block], rest[s:s + block]
+        f, r = F[s:s + block], rest32[s:s + block]
         x0 = X[f[:, 0]]
         a = X[f[:, 1]] - x0
         b = X[f[:, 2]] - x0
@@ -84,6 +90,14 @@ def folded_each(V, F, deltas, rest_normals=None, block=1024):
         dot += r[:, 1, None] * (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2])
         dot += r[:, 2, None] * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
         out[s:s + block] = dot < 0
+        t, j = np.nonzero(np.abs(dot) <= margin[s:s + block, None])
+        unsure.append((t + s, j))
+    t = np.concatenate([u[0] for u in unsure])
+    j = np.concatenate([u[1] for u in unsure])
+    if len(t):  # the close calls again in float64
+        x0 = V[F[t, 0]] + deltas[j, F[t, 0]]
+        n = cross_rows(V[F[t, 1]] + deltas[j, F[t, 1]] - x0, V[F[t, 2]] + deltas[j, F[t, 2]] - x0)
+        out[t, j] = np.einsum("ij,ij->i", rest[t], n) < 0
     return out.T
 
 
