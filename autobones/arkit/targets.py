@@ -47,7 +47,7 @@ FISSURE_GROWTH = 1.3
 # fraction is the same (skin mean 94.9 %, worst shape 84.9 %, against 94.8 / 84.9 with transfer's)
 # in 1.0-1.1 s instead of 1.3-1.6 (benchmarks/arkit.py)
 CORRESPONDENCE = dict(iterations=2, coarse_vertices=5000, fine_iterations=1)
-# the lip line of a one-surface head (:func:`mouth_fissure`): its two ends and middle, then the lips' middles
+# the lip line (:func:`mouth_fissure`): its two ends and middle, then the lips' middles
 MOUTH = ("cheilion_r", "stomion", "cheilion_l", "labiale_superius", "labiale_inferius")
 
 
@@ -113,16 +113,16 @@ def eye_fissures(V, F, landmarks, frame, growth=None):
 
 
 def mouth_fissure(V, F, landmarks, frame, names=MOUTH):
-    """Triangles of a one-surface head across its lip line: (m,) bool (all False without the landmarks).
+    """Triangles across a head's lip line: (m,) bool (all False without the landmarks or where the mouth is open).
 
     The lip line is the curve through ``cheilion_r``, ``stomion`` and ``cheilion_l`` (a quadratic
     in the canonical left-right coordinate, for height and depth); a triangle is across it when
     its corners lie on both sides in height, between the mouth corners, and within a lip's
     height (``labiale_superius`` to ``labiale_inferius``) of it in depth. On a closed-mouth scan
     these are the only triangles joining the upper lip to the lower one: held as they are they
-    tie the lips together, and jawOpen moved the menpo3d james scan's upper lip as far as its
-    lower one (0.30 and 0.32-0.43 mouth widths; ICT's own 0.05 and 0.79); set free, 0.085 and
-    0.58-0.62 (``benchmarks/arkit.py --lips``).
+    tie the lips together, and jawOpen moved the menpo3d james scan's upper lip about as far as
+    its lower one (0.29 and 0.37 mouth widths; ICT's own 0.05 and 0.80); set free, 0.09 and 0.60
+    (``benchmarks/arkit.py --lips``).
     """
     if not all(n in landmarks for n in names):
         return np.zeros(len(F), dtype=bool)
