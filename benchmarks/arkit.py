@@ -7,6 +7,9 @@ Run by hand, not by the tests::
     python benchmarks/arkit.py --no-remesh           # keep ICT's triangulation (an easier case)
     python benchmarks/arkit.py --one-surface         # skin only, taken as a one-surface scan (lids closed by
                                                      # autobones.arkit.lids, as transfer --arkit does on scans)
+    python benchmarks/arkit.py --time                # what the 52 shapes add to transfer on a 27k-vertex head
+    python benchmarks/arkit.py --lips                # how jawOpen and a few mouth shapes move the lips, with
+                                                     # and without the lip line set free, on the shared heads
 
 Heads: ICT-FaceKit identities (``../shared/data/ict/ict_facekit_shapes.npz``; the shape set's
 base is ICT's neutral head, which no identity is), each **remeshed** (one Loop subdivision,
@@ -164,6 +167,8 @@ def main(argv=None):
                     help="keep only each head's skin and take it as a one-surface scan (eye surface free, lids closed)")
     ap.add_argument("--no-lids", action="store_true", help="with --one-surface: only set the eye surface free")
     ap.add_argument("--json", help="also write the numbers here")
+    ap.add_argument("--time", action="store_true",
+                    help="what the 52 shapes add to transfer on a 27k-vertex head, and arkit_targets' stages")
     ap.add_argument("--lips", action="store_true",
                     help="how jawOpen and a few mouth shapes move the lips on the shared heads, with and without "
                          "the lip line set free")
@@ -174,6 +179,8 @@ def main(argv=None):
         return fold_heads()
     if args.lips:
         return lips()
+    if args.time:
+        return timing()
     S = load_shapes()
     neutral, F = read_obj(os.path.join(ICT, "generic_neutral_mesh.obj"))
     part = mesh_parts(len(neutral), F)
@@ -269,6 +276,38 @@ def fold_heads():
         print(f"| {n} | " + " | ".join(f"{r['before_repair'][n]} -> {r['after_repair'][n]}" for r in recs.values()) + " |")
     print("| all shapes | " + " | ".join(f"{sum(r['before_repair'].values())} -> {sum(r['after_repair'].values())}"
                                         for r in recs.values()) + " |")
+
+
+def timing(runs=3):
+    """The time the 52 shapes add on a 27k-vertex head (ICT identity002 with its landmarks): ``transfer``
+    and ``transfer(arkit=True)`` alternately ``runs`` times (the latter fits the shape set's
+    correspondence in a second thread beside its own fit), and ``arkit_targets`` alone on the rig with
+    its stage timings (its correspondence then in the same thread)."""
+    import autobones
+    from autobones.io.landmarks import read_landmarks
+    from autobones.io.mesh import load_mesh
+
+    V, F = load_mesh(os.path.join(ICT, "identity002.obj"))
+    lm = read_landmarks(os.path.join(ICT, "identity002.landmarks.json"))
+    autobones.transfer((V, F), lm, arkit=True)  # warm: the rig, the shape set and the jaw prior loaded once
+    plain, both, alone = [], [], []
+    for _ in range(runs):
+        t = time.perf_counter()
+        rig = autobones.transfer((V, F), lm)
+        plain.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        autobones.transfer((V, F), lm, arkit=True)
+        both.append(time.perf_counter() - t)
+        tim = {}
+        t = time.perf_counter()
+        arkit_targets(rig, timings=tim)
+        alone.append((time.perf_counter() - t, tim))
+    added = [b - a for a, b in zip(plain, both)]
+    print(f"identity002 ({len(V)} vertices), {runs} runs: transfer {np.median(plain):.2f} s "
+          f"({min(plain):.2f}-{max(plain):.2f}), transfer --arkit {np.median(both):.2f} s "
+          f"({min(both):.2f}-{max(both):.2f}): the shapes add {np.median(added):.2f} s ({min(added):.2f}-{max(added):.2f})")
+    for total, tim in alone:
+        print(f"arkit_targets alone {total:.2f} s: " + ", ".join(f"{k} {v:.2f}" for k, v in tim.items()))
 
 
 LIP_SHAPES = ("jawOpen", "mouthFunnel", "mouthLowerDownLeft", "mouthShrugUpper")
