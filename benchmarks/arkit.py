@@ -98,15 +98,14 @@ def score(X, T, mask):
     return 1.0 - np.linalg.norm(X[mask] - T[mask]) / max(np.linalg.norm(T[mask]), 1e-300)
 
 
-def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surface=False, close_lids=True):
-    Vi = neutral + z[f"identity/identity{k:03d}"].astype(np.float64)
-    # landmarks: ICT's neutral landmarks at their barycentric place on the identity
-    lf, lb = carry(np.array(list(lm_neutral.values())), neutral, F, part)
-    lm = {n: (Vi[F[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm_neutral, lf, lb)}
-    if do_remesh:
-        Vt, Ft = remesh(Vi, F)
-    else:
-        Vt, Ft = Vi, F
+def remeshed_identity(Vi, F, part, lm, do_remesh=True, one_surface=False):
+    """An ICT identity ``Vi`` (n, 3) on ICT's triangles ``F`` (parts ``part``, landmarks ``lm``) as a
+    head nobody triangulated for it: remeshed (:func:`remesh`), optionally its skin alone (a scan
+    has no eyeballs, teeth or socket), its landmarks moved to the closest remeshed point, and each
+    remeshed vertex's place on the identity (ICT face ``tf``, barycentric ``tb``) in the ICT part its
+    remeshed part came from (the part most of its vertices are closest to): the truth of an ICT
+    displacement field is interpolated there. Returns (Vt, Ft, landmarks, tf, tb)."""
+    Vt, Ft = remesh(Vi, F) if do_remesh else (Vi, F)
     if one_surface:  # the skin alone, no eyeballs, teeth or socket: as a scan would be
         tpart = mesh_parts(len(Vt), Ft)
         keep = tpart == np.argmax(np.bincount(tpart))
@@ -114,20 +113,26 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
         remap[keep] = np.arange(keep.sum())
         Vt, Ft = Vt[keep], remap[Ft[keep[Ft[:, 0]]]]
     tpart = mesh_parts(len(Vt), Ft)
-    tskin = tpart == np.argmax(np.bincount(tpart))
-    # each target vertex's place on the identity, in the part its remeshed part came from (the part
-    # most of its vertices are closest to): the truth is interpolated there
     f0, _ = carry(Vt, Vi, F, part)
     votes = np.zeros((tpart.max() + 1, part.max() + 1))
     np.add.at(votes, (tpart, part[F[f0, 0]]), 1)
-    labels = np.argmax(votes, axis=1)[tpart]
-    tf, tb = carry(Vt, Vi, F, part, labels)
+    tf, tb = carry(Vt, Vi, F, part, np.argmax(votes, axis=1)[tpart])
+    _, lfv, lbv, _ = closest_points(np.array(list(lm.values())), Vt, Ft)
+    lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
+    return Vt, Ft, lm_t, tf, tb
+
+
+def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surface=False, close_lids=True):
+    Vi = neutral + z[f"identity/identity{k:03d}"].astype(np.float64)
+    # landmarks: ICT's neutral landmarks at their barycentric place on the identity
+    lf, lb = carry(np.array(list(lm_neutral.values())), neutral, F, part)
+    lm = {n: (Vi[F[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm_neutral, lf, lb)}
+    Vt, Ft, lm_t, tf, tb = remeshed_identity(Vi, F, part, lm, do_remesh, one_surface)
+    tpart = mesh_parts(len(Vt), Ft)
+    tskin = tpart == np.argmax(np.bincount(tpart))
     names = S.names
     T = np.stack([np.einsum("vcd,vc->vd", sum(z[f"expression/{i}"].astype(np.float64) for i in ict_names(n))[F[tf]],
                             tb) for n in names])
-    # landmarks onto the remeshed surface
-    _, lfv, lbv, _ = closest_points(np.array(list(lm.values())), Vt, Ft)
-    lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
     D = np.stack([S.deltas[n] for n in names])
     t0 = time.perf_counter()
     P = dense_correspondence(S.vertices, S.faces, Vt, Ft, S.landmarks, lm_t, **CORRESPONDENCE)[0]

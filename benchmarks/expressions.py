@@ -8,6 +8,8 @@ Run by hand, not by the tests::
     python benchmarks/expressions.py --part rig --refine 0   # no nonlinear refinement
     python benchmarks/expressions.py --quick    # bones: sparse and dense only, no rigid variant
     python benchmarks/expressions.py --sweeps 60  # more rigid block-descent sweeps
+    python benchmarks/expressions.py --part ict57 --refine 0   # ICT's AU shapes, remeshed transfer (~20 min)
+    python benchmarks/expressions.py --part ict57 --shapes jawOpen eyeBlink_L --identities identity003
 
 Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
 landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
@@ -27,6 +29,19 @@ condyle glide) in jawOpen. Where this is below the target, no lid or jaw weights
 the rest must come from the muscles.
 
 Part 3, bones alone, follows.
+
+Part "ict57" (``ict57_benchmark``, issue #16 item 3; not run by "all"): every ICT-FaceKit shape the
+AU <-> ARKit table maps (``au_arkit`` in ``generic_rig/expressions.json``: 34 shapes, both halves
+where ICT splits them, from ``ict_facekit_shapes.npz``) fitted by ``fit_rig`` on identity002 (ICT's
+triangulation; skin and all, as above), and the same parameters applied on identity000 and
+identity001 **remeshed** (``remesh`` of benchmarks/arkit.py: one Loop subdivision, then
+``fast_simplification`` back; no vertex or triangle is ICT's), each rigged by ``transfer`` with
+ICT's neutral landmarks carried onto it as benchmarks/arkit.py's ``run_identity`` does. The truth
+at a remeshed vertex is the ICT displacement interpolated at its closest point on the identity,
+in the part it came from. Beside it, the copy through the correspondence (``copy_through``).
+Stage 1's grid solves are shared between the shapes (``SharedSolves``: ``linear_pose`` and its QR
+do not depend on the target), which gives ``_solve_linear``'s answers (checked at the start).
+There is no "with tissue pass" number yet (issue #16 item 1 is not built): the column prints "-".
 
 Data: ICT-FaceKit (``../shared/data/ict``), a linear model whose neutral head
 ``generic_neutral_mesh.obj`` and four real expression shapes (``jawOpen``,
@@ -562,27 +577,15 @@ def ict57_shapes():
 
 
 def remeshed_identity(name, z, N0, F, part, lm_neutral):
-    """ICT identity ``name`` remeshed, with its landmarks and where its truth is read, as
-    benchmarks/arkit.py's ``run_identity`` does: the identity is ``N0 + identity`` (cm); ICT's
-    neutral landmarks go to their barycentric place on it, then to the closest remeshed point;
-    each remeshed vertex is carried to its closest point on the identity in the ICT part its
-    remeshed part came from (the part most of its vertices are closest to).
-    Returns (Vt (n, 3), Ft (m, 3), landmarks dict, tf (n,) ICT face, tb (n, 3) barycentric)."""
-    from autobones.geometry.closest import closest_points
-
+    """ICT identity ``name`` (``N0 + identity``, cm) with ICT's neutral landmarks at their barycentric
+    place on it, then remeshed as benchmarks/arkit.py's ``run_identity`` does (its
+    ``remeshed_identity``). Returns (Vt (n, 3), Ft (m, 3), landmarks dict, tf (n,) ICT face,
+    tb (n, 3) barycentric: where each remeshed vertex's truth is read)."""
     ak = _arkit_bench()
     Vi = N0 + z[f"identity/{name}"].astype(np.float64)
     lf, lb = ak.carry(np.array(list(lm_neutral.values())), N0, F, part)
     lm = {n: (Vi[F[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm_neutral, lf, lb)}
-    Vt, Ft = ak.remesh(Vi, F)
-    tpart = mesh_parts(len(Vt), Ft)
-    f0, _ = ak.carry(Vt, Vi, F, part)
-    votes = np.zeros((tpart.max() + 1, part.max() + 1))
-    np.add.at(votes, (tpart, part[F[f0, 0]]), 1)
-    tf, tb = ak.carry(Vt, Vi, F, part, np.argmax(votes, axis=1)[tpart])
-    _, lfv, lbv, _ = closest_points(np.array(list(lm.values())), Vt, Ft)
-    lm_t = {n: (Vt[Ft[f]] * b[:, None]).sum(axis=0) for n, f, b in zip(lm, lfv, lbv)}
-    return Vt, Ft, lm_t, tf, tb
+    return ak.remeshed_identity(Vi, F, part, lm)
 
 
 def ict57_benchmark(source="identity002", targets=("identity000", "identity001"), refine=30, shapes=None):
