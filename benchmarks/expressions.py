@@ -4,7 +4,7 @@ transfer (2), and the placed bones alone (3).
 Run by hand, not by the tests::
 
     python benchmarks/expressions.py            # everything (~4 min on 2 cores)
-    python benchmarks/expressions.py --part rig # parts 1 and 2 only (~95 s)
+    python benchmarks/expressions.py --part rig # parts 1 and 2 only (~8 min with --refine 0, 2026-12-02)
     python benchmarks/expressions.py --part rig --refine 0   # no nonlinear refinement
     python benchmarks/expressions.py --quick    # bones: sparse and dense only, no rigid variant
     python benchmarks/expressions.py --sweeps 60  # more rigid block-descent sweeps
