@@ -227,10 +227,10 @@ def _onto_rim(X, j, V, nb):
 
 def _decimate(V, F, count):
     """Quadric-error decimation of ``(V, F)`` to about ``count`` vertices (fast_simplification, else libigl)."""
-    try:
-        import fast_simplification  # noqa: F401
-    except ImportError:  # pragma: no cover - libigl's edge collapse, slower and a little less accurate
-        import igl
+    import importlib.util
+
+    if importlib.util.find_spec("fast_simplification") is None:  # pragma: no cover - libigl's edge collapse,
+        import igl                                                  # slower and a little less accurate
         Vc, Fc = igl.decimate(V, F, max(4, int(len(F) * count / len(V))))[:2]
         return np.asarray(Vc, dtype=np.float64), np.asarray(Fc, dtype=np.int64)
     Vc, Fc = quadric_simplify(V.astype(np.float32), F.astype(np.int32), 1.0 - count / len(V))
