@@ -212,11 +212,11 @@ class DeformationTransfer:
         self.source_face_ = np.where(covered, face, -1)
         # each source triangle's turn onto the target: rotation of the warp's gradient
         used = np.unique(faces[covered])
+        R = np.zeros((0, 3, 3))  # the turn of each used source triangle
         if len(used):
-            R = np.zeros((len(F_src), 3, 3))
             if self.turn == "global":
                 A0, B0 = V_src - V_src.mean(axis=0), P - P.mean(axis=0)
-                R[used] = polar_rotations((B0.T @ A0)[None])[0]
+                R = np.broadcast_to(polar_rotations((B0.T @ A0)[None])[0], (len(used), 3, 3))
             else:
                 W = EP @ _inverse(triangle_frames(V_src, F_src))
                 if self.turn == "smooth":  # the warp's gradient averaged over a few rings first
@@ -229,9 +229,7 @@ class DeformationTransfer:
                     for _ in range(self.smooth_iterations):
                         Wf = to_f @ (to_v @ Wf)
                     W = Wf.reshape(-1, 3, 3)
-                R[used] = polar_rotations(W[used])
-            self._turn_src = R
-        self._used = used
+                R = polar_rotations(W[used])
         # anchors: target vertices whose nearest source triangle never moves
         anchored = np.zeros(n_t, dtype=bool)
         if moving is not None:
@@ -266,7 +264,7 @@ class DeformationTransfer:
         if pinned is not None and len(pinned):
             solved |= np.isin(part, part[np.asarray(pinned, dtype=np.int64)])
         rows = self._rows = np.flatnonzero(solved)
-        self._rhs_operators(V_src, F_src, used, (G.T @ A3 @ S).tocsr()[rows])
+        self._rhs_operators(V_src, F_src, used, R, (G.T @ A3 @ S).tocsr()[rows])
         L, diag = L[rows][:, rows], diag[rows]
         self.timings_ = {"map": time.perf_counter() - t0}
         t1 = time.perf_counter()
@@ -283,10 +281,10 @@ class DeformationTransfer:
         self.n_t_, self.F_tgt_, self.V_tgt_ = n_t, F_tgt, V_tgt
         return self
 
-    def _rhs_operators(self, V_src, F_src, used, B):
+    def _rhs_operators(self, V_src, F_src, used, R, B):
         """Keep what the right-hand sides of every shape need (:meth:`_right_hand_sides`).
 
-        A used source triangle ``u`` (frame ``E``, turn ``R``) asks of a shape the gradient
+        A used source triangle ``u`` (frame ``E``, turn ``R[u]``, (mu, 3, 3)) asks of a shape the gradient
         ``J = R (E' - E) E^-1 R^T`` (``E'`` its frame in the shape), and ``B`` (n_t, 3 mu) sums
         ``J``'s columns into the target's rows: ``E^-1 R^T`` is folded into ``B`` here, once, so
         a shape needs only ``R (E' - E)`` per triangle. A source triangle with no frame (zero
@@ -298,7 +296,6 @@ class DeformationTransfer:
             return
         Fu = F_src[used]
         E = triangle_frames(V_src, Fu)
-        R = self._turn_src[used]
         M = _inverse(E) @ np.transpose(R, (0, 2, 1))  # (mu, 3, 3): E^-1 R^T
         # B1[t, (u, b)] = sum_c B[t, (u, c)] M[u, b, c]
         r = 3 * np.arange(mu)[:, None, None] + np.arange(3)[None, None, :]  # (u, ., c)

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AutobonesError
-from ..geometry.normals import triangle_normals
-from .folds import folded_triangles
+from .folds import folded_each
 from .names import ABSENT, ARKIT_NAMES
 
 # landmarks a set and a head must share: the correspondence's TPS needs a few non-coplanar points
@@ -97,7 +96,9 @@ def _load(folder, stamp):
 
 def flipped_triangles(V, F, deltas):
     """Triangles whose normal turns over (dot < 0) between ``V`` (n, 3) and ``V + D`` for each
-    displacement ``D`` (n, 3) of ``deltas`` (dict name -> D): dict name -> count. The rest normals
-    are computed once for all shapes."""
-    rest = triangle_normals(V, F)
-    return {n: int(folded_triangles(V, F, D, rest_normals=rest).sum()) for n, D in deltas.items()}
+    displacement ``D`` (n, 3) of ``deltas`` (dict name -> D): dict name -> count
+    (:func:`autobones.arkit.folds.folded_each`, all shapes at once)."""
+    if not deltas:
+        return {}
+    counts = folded_each(V, F, np.stack(list(deltas.values()))).sum(axis=1)
+    return {n: int(c) for n, c in zip(deltas, counts)}

@@ -131,19 +131,10 @@ def mouth_fissure(V, F, landmarks, frame, names=MOUTH):
         return np.zeros(len(F), dtype=bool)
     C = frame.to_canonical(np.asarray(V, dtype=np.float64))
     xs = np.array([r[0], st[0], l[0]])
-    # the quadratic through the three points by Lagrange's basis (a repeated x gives a straight line)
-    def through(values, x):
-        if len(np.unique(xs)) < 3:
-            return np.interp(x, np.sort(xs[[0, 2]]), values[[0, 2]][np.argsort(xs[[0, 2]])])
-        out = np.zeros_like(x)
-        for i in range(3):
-            j, k = [q for q in range(3) if q != i]
-            out += values[i] * (x - xs[j]) * (x - xs[k]) / ((xs[i] - xs[j]) * (xs[i] - xs[k]))
-        return out
-
+    deg = 2 if len(np.unique(xs)) == 3 else 1  # the quadratic through the three (a line if two share x)
     x = C[:, 0]
-    height = C[:, 1] - through(np.array([r[1], st[1], l[1]]), x)
-    depth = C[:, 2] - through(np.array([r[2], st[2], l[2]]), x)
+    height = C[:, 1] - np.polyval(np.polyfit(xs, [r[1], st[1], l[1]], deg), x)
+    depth = C[:, 2] - np.polyval(np.polyfit(xs, [r[2], st[2], l[2]], deg), x)
     inside = (x > min(r[0], l[0])) & (x < max(r[0], l[0])) & (np.abs(depth) < up[1] - lo[1])
     h = height[F]
     return inside[F].all(axis=1) & (h.min(axis=1) < 0) & (h.max(axis=1) > 0)
