@@ -4,6 +4,7 @@ Run by hand, not by the tests::
 
     python benchmarks/landmarks.py            # everything, ~5 minutes on 2 cores
     python benchmarks/landmarks.py --quick    # 3 heads, 4 orientations, 2 transfer pairs
+    python benchmarks/landmarks.py --time [--baseline REV]   # issue #14: seconds per head, ~4 minutes
     /tmp/dlibvenv/bin/python benchmarks/landmarks.py --dlib   # + dlib's 68-point predictor
 
 Data: ``../shared/data``: ICT ``generic_neutral_mesh`` and ``identity000..002``
@@ -53,6 +54,13 @@ warm-up call first, its time printed apart), split into frame (orientation),
 render (rasterise + shade + surface points), 2-D (the detector on the pictures),
 refine, and other (lift, combine, snap). Target: <= 3 s for a 30k-vertex head on
 this 2-core machine. No timing is asserted.
+
+``--time`` (issue #14: <= 1.5 s per head after the model load): ``autobones.detect_landmarks``
+(orientation included) on the six heads above, LeePerrySmith, demosthenes and demosthenes
+Loop-subdivided twice (133,887 vertices, a bust scan's density), median of three calls per head
+in a fresh process after a warm-up call. With ``--baseline REV`` the same worker runs on
+commit REV's code (``git archive``, laid out as installed) in alternation with this checkout's,
+twice each, so both are measured in the same minutes on the same host; the ratio is per head.
 """
 from __future__ import annotations
 
@@ -254,13 +262,105 @@ def version(pkg):
         return None
 
 
+TIME_HEADS = {**{h: m for h, (m, _) in HEADS.items()}, "LeePerrySmith": "misc/LeePerrySmith.obj",
+              "demosthenes": "misc/demosthenes-low-res.obj", "demosthenes loop x2": "misc/demosthenes-low-res.obj"}
+
+
+def time_worker(paths):
+    """In a fresh process: median of three ``detect_landmarks`` calls per mesh, after a warm-up call
+    (the model load). Prints one JSON object, mesh path -> seconds."""
+    import json
+
+    meshes = {p: load_mesh(p) for p in paths}
+    autobones.detect_landmarks(meshes[paths[0]])
+    out = {"autobones": str(Path(autobones.__file__).parent)}
+    for p, mesh in meshes.items():
+        ts = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            autobones.detect_landmarks(mesh)
+            ts.append(time.perf_counter() - t0)
+        out[p] = float(np.median(ts))
+    print(json.dumps(out))
+
+
+def baseline_tree(rev, tmp):
+    """Commit ``rev``'s package laid out as installed (cli/ and generic_rig/ inside autobones/), under
+    ``tmp``; returns the folder to put on PYTHONPATH."""
+    import tarfile
+    import io
+
+    blob = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "autobones", "cli", "generic_rig"],
+                          capture_output=True, check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
+        tar.extractall(tmp, filter="data")
+    for sub in ("cli", "generic_rig"):
+        os.replace(os.path.join(tmp, sub), os.path.join(tmp, "autobones", sub))
+    return tmp
+
+
+def time_heads(baseline=None):
+    """Issue #14's landmark timing table (see the module docstring)."""
+    import json
+    import sys
+    import tempfile
+
+    import trimesh
+
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = {}
+        for h, rel in TIME_HEADS.items():
+            if h.endswith("loop x2"):
+                V, F = load_mesh(DATA / rel)
+                V, F = trimesh.remesh.subdivide_loop(V, F, iterations=2)
+                paths[h] = os.path.join(tmp, "loop2.obj")
+                trimesh.Trimesh(V, F, process=False).export(paths[h])
+            else:
+                paths[h] = str(DATA / rel)
+        sizes = {h: len(load_mesh(p)[0]) for h, p in paths.items()}
+        runs = {"this checkout": None}
+        if baseline:
+            runs[baseline] = baseline_tree(baseline, os.path.join(tmp, "base"))
+        got = {k: [] for k in runs}
+        for _ in range(2):
+            for label, pypath in runs.items():
+                env = dict(os.environ, **({"PYTHONPATH": pypath} if pypath else {}))
+                proc = subprocess.run([sys.executable, __file__, "--time-worker", *paths.values()],
+                                      capture_output=True, text=True, env=env, cwd=tmp)
+                if proc.returncode:
+                    raise SystemExit(f"{label}: {proc.stderr.strip().splitlines()[-1]}")
+                out = json.loads(proc.stdout.strip().splitlines()[-1])
+                where = out.pop("autobones")
+                if pypath and not where.startswith(pypath):
+                    raise SystemExit(f"the baseline worker imported autobones from {where}, not {pypath}")
+                got[label].append(out)
+    print(f"\n## Time per head, `detect_landmarks` with orientation, after the model load (median of 3 calls; "
+          f"two fresh processes per code, alternating)\n")
+    labels = list(runs)
+    head = "| head | vertices | " + " | ".join(f"{l} s" for l in labels) + (" | ratio |" if baseline else "")
+    print(head)
+    print("|---|---:|" + "---:|" * len(labels) + ("---:|" if baseline else ""))
+    for h, p in paths.items():
+        secs = [min(r[p] for r in got[l]) for l in labels]
+        ratio = f" | {secs[0] / secs[1]:.2f}x |" if baseline else ""
+        print(f"| {h} | {sizes[h]:,} | " + " | ".join(f"{s:.2f}" for s in secs) + ratio)
+    print("\n(each figure: the faster of the two processes' medians; target <= 1.5 s per head)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="3 heads, 4 orientations, 2 transfer pairs")
     ap.add_argument("--dlib", action="store_true", help="also dlib's 68-point predictor (needs dlib-bin and "
                                                         "face-recognition-models)")
     ap.add_argument("--size", type=int, default=384, help="picture size of the detector (default 384, as LandmarkDetector)")
+    ap.add_argument("--time", action="store_true", help="issue #14's timing table only (seconds per head)")
+    ap.add_argument("--baseline", metavar="REV", help="with --time: also time commit REV in the same minutes")
+    ap.add_argument("--time-worker", nargs="+", metavar="MESH", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.time_worker:
+        return time_worker(args.time_worker)
+    if args.time:
+        return time_heads(args.baseline)
     wall0 = time.perf_counter()
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()

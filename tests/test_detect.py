@@ -52,7 +52,8 @@ def test_lift_interpolates_inside_and_reaches_the_nearest_covered_pixel():
     rows, cols = np.mgrid[0:H, 0:W].astype(float)
     S = np.stack([cols, rows, cols + rows], axis=2)          # a plane: point = (x, y, x + y)
     S[:, 6:] = np.nan                                        # empty on the right
-    P = lift(S, np.array([[2.25, 3.5], [6.5, 1.0], [7.0 + 3.5, 1.0]]), reach=2)
+    P = lift(lambda r, c: S[r, c], np.isfinite(S[..., 0]), np.array([[2.25, 3.5], [6.5, 1.0], [7.0 + 3.5, 1.0]]),
+             reach=2)
     np.testing.assert_allclose(P[0], [2.25, 3.5, 5.75])      # bilinear, exact on a plane
     np.testing.assert_allclose(P[1], [5.0, 1.0, 6.0])        # nearest covered pixel, 1.5 px away
     assert np.all(np.isnan(P[2]))                            # 5.5 px from cover: beyond reach
@@ -147,7 +148,9 @@ def test_a_dense_scan_is_pictured_from_a_coarser_copy(ict, monkeypatch):
     V, F, truth, _ = ict
     monkeypatch.setattr(views, "PICTURE_ABOVE", 10000)
     monkeypatch.setattr(views, "PICTURE_VERTICES", 8000)
-    Vp, Fp = views.pictured_mesh(V, F)
+    Vp, Fp, skin, pictured_skin = views.pictured_mesh(V, F)
+    assert skin.shape == (len(F),) and pictured_skin.shape == (len(Fp),)
+    assert skin.sum() < len(F) and pictured_skin.sum() < len(Fp)    # ICT's eyes, teeth... are not skin
     assert len(Vp) < 0.5 * len(V)
     found = LandmarkDetector().detect(V, F)
     err = errors(found, truth)

@@ -35,6 +35,7 @@ import contextlib
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -50,7 +51,7 @@ from ..render.raster import rasterize, shade, surface_points
 from .mediapipe import MEDIAPIPE_POINTS, MediaPipeFaceMesh, quiet_stderr
 from .orientation import face_axes, nose_forward, plausible, squared_frame, turn_degrees, turns
 from .refine import refine
-from .views import face_camera, lift, pictured_mesh, skin_faces, view_direction, weighted_median
+from .views import face_camera, lift, pictured_mesh, view_direction, weighted_median
 
 #: Default views: (yaw, pitch) in degrees; yaw turns the camera toward the subject's
 #: left, pitch raises it.
@@ -165,18 +166,16 @@ class LandmarkDetector:
         V = np.asarray(V, dtype=np.float64)
         F = np.asarray(F, dtype=np.int64)
         frame = detect_frame(V, F) if frame is None else frame
-        # the frame from the whole mesh: a clustered copy's rim and flat cut read differently
-        Vp, Fp = pictured_mesh(V, F)
+        # the frame from the whole mesh: a clustered copy's rim and flat cut read differently;
+        # the skin is the same in every frame the loop below tries
+        Vp, Fp, skin_in, skin = pictured_mesh(V, F)
+        # the landmarks end on the input's own skin (None: the pictured mesh is the input)
+        snap = None if Vp is V else (V, F if skin_in.all() else F[skin_in])
+        V, F = Vp, Fp
         detector = self.detector if self.detector is not None else MediaPipeFaceMesh()
         # MediaPipe's graph threads log to file descriptor 2 while they work
         quiet = quiet_stderr() if isinstance(detector, MediaPipeFaceMesh) else contextlib.nullcontext()
         with quiet:
-            skin = skin_faces(V, F)             # the same in every frame the loop below tries
-            snap = None                         # the pictured skin itself
-            if Vp is not V:
-                snap = (V, F if skin.all() else F[skin])
-                skin = skin_faces(Vp, Fp)
-            V, F = Vp, Fp
             found = self._detect(V, F, skin, frame, detector, what, search=self.search, snap=snap)
             # a face turned away from the frame's front (a head turned in its file, a face-only
             # scan): look again, square to the face the landmarks describe
@@ -216,7 +215,7 @@ class LandmarkDetector:
             found = detector(shade(Vt, F, buf, light_dir=(0.0, 0.0, 1.0), ambient=0.15))
             if found is None:
                 return None, None
-            P0 = lift(surface_points(Vt, F, buf), found[:, :2])
+            P0 = lift(partial(surface_points, Vt, F, buf), buf.mask, found[:, :2])
             return found, (P0 if np.isfinite(P0[:, 0]).sum() >= 0.5 * len(P0) else None)
 
         for M in turns(search):
@@ -277,7 +276,7 @@ class LandmarkDetector:
             view_info.append({"yaw": float(yaw), "pitch": float(pitch), "face": px is not None})
             if px is None:
                 continue
-            P = lift(surface_points(Vc, F, buf), px)
+            P = lift(partial(surface_points, Vc, F, buf), buf.mask, px)
             if not cands:
                 # outward normals whichever way the file winds its triangles: the face seen
                 # from the first view faces that view (a centroid test fails on a face-only shell)

@@ -8,7 +8,6 @@ Frames: every function here works in the canonical head frame (+Y up, +Z out of 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..geometry.areas import triangle_areas
 from ..geometry.proxy import decimate_parts, mesh_proxy
@@ -38,9 +37,15 @@ PICTURE_VERTICES = 30000
 
 
 def pictured_mesh(V, F, above=None, vertices=None):
-    """The mesh to draw pictures of: ``(V, F)`` itself up to ``above`` (default
-    :data:`PICTURE_ABOVE`) vertices, else welded and each connected part vertex-clustered to a
-    common fraction (about ``vertices``, default :data:`PICTURE_VERTICES`, in all).
+    """The mesh to draw pictures of, and the skin on it and on the input.
+
+    ``(V, F)`` itself up to ``above`` (default :data:`PICTURE_ABOVE`) vertices, else welded and
+    each connected part vertex-clustered to a common fraction (about ``vertices``, default
+    :data:`PICTURE_VERTICES`, in all). The skin is the connected part with the largest area (after
+    welding coincident vertices) when it holds at least half the area, else every triangle:
+    scanned or modelled heads often carry eyeballs, eyelashes, teeth in separate parts, and a
+    landmark lifted from an oblique picture must land on the skin, not on an eyelash. A dense
+    mesh's parts come from its welded copy, so they are found once.
 
     Parameters
     ----------
@@ -50,42 +55,59 @@ def pictured_mesh(V, F, above=None, vertices=None):
     Returns
     -------
     Vp : (k, 3) float64
-        Same frame and units as ``V``.
+        Same frame and units as ``V`` (``V`` itself when small enough).
     Fp : (mp, 3) int64
+    skin : (m,) bool
+        The skin's triangles in ``F``.
+    pictured_skin : (mp,) bool
+        The skin's triangles in ``Fp``.
     """
     above = PICTURE_ABOVE if above is None else above
     vertices = PICTURE_VERTICES if vertices is None else vertices
     if len(V) <= above:
-        return V, F
+        skin = skin_faces(V, F)
+        return V, F, skin, skin
     proxy = mesh_proxy(V, F, 1e-6 * float(np.ptp(V, axis=0).max()))
     if len(proxy.vertices) <= above:
-        return proxy.vertices, proxy.faces
-    Vp, Fp, *_ = decimate_parts(proxy.vertices, proxy.faces, vertices, quadric=False)
-    return Vp, Fp
+        Vp, Fp = proxy.vertices, proxy.faces
+        part = mesh_parts(len(Vp), Fp)
+        pictured = part[Fp[:, 0]]
+    else:
+        Vp, Fp, part, pictured, _ = decimate_parts(proxy.vertices, proxy.faces, vertices, quadric=False)
+    F = np.asarray(F, dtype=np.int64)
+    face_part = part[proxy.index[F[:, 0]]]
+    skin = _largest_by_area(face_part, triangle_areas(V, F))
+    if skin is None:
+        return Vp, Fp, np.ones(len(F), dtype=bool), np.ones(len(Fp), dtype=bool)
+    return Vp, Fp, face_part == skin, pictured == skin
+
+
+def _largest_by_area(face_part, area):
+    """The part label holding the most area, or None when it holds less than half of it."""
+    totals = np.bincount(face_part, weights=area)
+    return None if totals.max() < 0.5 * totals.sum() else int(np.argmax(totals))
 
 
 def skin_faces(V, F):
     """(m,) bool: the triangles of the skin, the connected part with the largest area (after
-    welding coincident vertices), when it holds at least half the area; else every triangle.
-
-    Scanned or modelled heads often carry eyeballs, eyelashes, teeth in separate parts; a
-    landmark lifted from an oblique picture must land on the skin, not on an eyelash."""
-    area = triangle_areas(V, F)
+    welding coincident vertices), when it holds at least half the area; else every triangle."""
     _, _, index = weld(V, F, 1e-9 * max(float(np.ptp(V, axis=0).max()), 1e-300))
     part = mesh_parts(int(index.max()) + 1, index[F])[index[F[:, 0]]]
-    totals = np.bincount(part, weights=area)
-    if totals.max() < 0.5 * totals.sum():
-        return np.ones(len(F), dtype=bool)
-    return part == int(np.argmax(totals))
+    skin = _largest_by_area(part, triangle_areas(V, F))
+    return np.ones(len(F), dtype=bool) if skin is None else part == skin
 
 
-def lift(points_map, px, reach=3):
+def lift(points_at, covered, px, reach=3):
     """Surface points under pixel positions.
 
     Parameters
     ----------
-    points_map : (H, W, 3) float
-        :func:`autobones.render.surface_points` (NaN where empty).
+    points_at : callable
+        ``points_at(rows, cols)`` -> (k, 3) float, the surface point seen at those pixel
+        centres (NaN where empty), e.g. :func:`autobones.render.surface_points` bound to a
+        rendering: only the pixels around ``px`` are evaluated, not the whole picture.
+    covered : (H, W) bool
+        Pixels the surface covers.
     px : (k, 2) float
         Pixel coordinates (x = column, y = row).
     reach : int
@@ -97,7 +119,7 @@ def lift(points_map, px, reach=3):
         Bilinear interpolation of the four surrounding pixels' points where all four
         are covered; else the nearest covered pixel within ``reach``; else NaN.
     """
-    H, W, _ = points_map.shape
+    H, W = covered.shape
     px = np.asarray(px, dtype=np.float64)
     out = np.full((len(px), 3), np.nan)
     x0 = np.floor(px[:, 0]).astype(np.int64)
@@ -106,18 +128,27 @@ def lift(points_map, px, reach=3):
     i = np.flatnonzero(inside)
     fx = (px[i, 0] - x0[i])[:, None]
     fy = (px[i, 1] - y0[i])[:, None]
-    c = [points_map[y0[i] + dy, x0[i] + dx] for dy, dx in ((0, 0), (0, 1), (1, 0), (1, 1))]
+    c = points_at(np.concatenate([y0[i] + dy for dy in (0, 0, 1, 1)]),
+                  np.concatenate([x0[i] + dx for dx in (0, 1, 0, 1)])).reshape(4, len(i), 3)
     bil = (c[0] * (1 - fx) * (1 - fy) + c[1] * fx * (1 - fy) + c[2] * (1 - fx) * fy + c[3] * fx * fy)
     ok = np.all(np.isfinite(bil), axis=1)
     out[i[ok]] = bil[ok]
-    rest = np.flatnonzero(~np.all(np.isfinite(out), axis=1))
+    rest = np.flatnonzero(~np.all(np.isfinite(out), axis=1) & np.all(np.isfinite(px), axis=1))
     if len(rest):
-        covered = np.argwhere(np.isfinite(points_map[..., 0]))      # (c, 2) row, col
-        if len(covered):
-            d, j = cKDTree(covered[:, ::-1].astype(np.float64)).query(px[rest])
-            near = d <= reach
-            rc = covered[j[near]]
-            out[rest[near]] = points_map[rc[:, 0], rc[:, 1]]
+        # the covered pixel centres within reach lie in a window around each point
+        span = np.arange(-reach, reach + 2)
+        r = np.floor(px[rest, 1])[:, None, None].astype(np.int64) + span[None, :, None]
+        q = np.floor(px[rest, 0])[:, None, None].astype(np.int64) + span[None, None, :]
+        r, q = np.broadcast_arrays(r, q)
+        d = np.hypot(q - px[rest, 0][:, None, None], r - px[rest, 1][:, None, None])
+        valid = (r >= 0) & (r < H) & (q >= 0) & (q < W) & (d <= reach)
+        valid[valid] = covered[r[valid], q[valid]]
+        d = np.where(valid, d, np.inf).reshape(len(rest), -1)
+        best = np.argmin(d, axis=1)
+        near = np.isfinite(d[np.arange(len(rest)), best])
+        rr, qq = r.reshape(len(rest), -1), q.reshape(len(rest), -1)
+        pick = np.arange(len(rest))[near]
+        out[rest[near]] = points_at(rr[pick, best[near]], qq[pick, best[near]])
     return out
 
 

@@ -185,8 +185,8 @@ def _fill_batch(tri, edges, s, e, W, zbuf, fbuf, bbuf):
     l0 = edges.l0o[t] + edges.a0[t] * dx + edges.b0[t] * dy
     l1 = edges.l1o[t] + edges.a1[t] * dx + edges.b1[t] * dy
     l2 = 1.0 - l0 - l1
-    inside = (l0 >= -_INSIDE_EPS) & (l1 >= -_INSIDE_EPS) & (l2 >= -_INSIDE_EPS)
-    if not inside.any():
+    inside = np.flatnonzero((l0 >= -_INSIDE_EPS) & (l1 >= -_INSIDE_EPS) & (l2 >= -_INSIDE_EPS))
+    if len(inside) == 0:
         return
     t, l0, l1, l2 = t[inside], l0[inside], l1[inside], l2[inside]
     pix = edges.base[t] + dy[inside] * W + dx[inside]
@@ -205,8 +205,8 @@ def _fill_batch(tri, edges, s, e, W, zbuf, fbuf, bbuf):
     bbuf[pw, 0], bbuf[pw, 1], bbuf[pw, 2] = l0[f], l1[f], l2[f]
 
 
-def surface_points(V, F, buffers):
-    """The 3-D surface point seen at each pixel centre.
+def surface_points(V, F, buffers, rows=None, cols=None):
+    """The 3-D surface point seen at pixel centres.
 
     Parameters
     ----------
@@ -216,21 +216,25 @@ def surface_points(V, F, buffers):
         The triangles that were rasterised.
     buffers : RenderBuffers
         From :func:`rasterize` ``(V, F, camera)``.
+    rows, cols : (k,) int or None
+        Only these pixels (in range); None: every pixel.
 
     Returns
     -------
-    (H, W, 3) float64
+    (H, W, 3) float64, or (k, 3) with ``rows`` and ``cols``
         World point under each pixel (on triangle ``face_id`` at ``bary``);
         NaN where empty.
     """
     V, F = mesh_arrays(V, F, "mesh", allow_no_faces=True, finite=False)
-    H, W = buffers.face_id.shape
-    P = np.full((H, W, 3), np.nan)
-    m = buffers.mask
+    if rows is None:
+        face, bary = buffers.face_id, buffers.bary
+    else:
+        face, bary = buffers.face_id[rows, cols], buffers.bary[rows, cols]
+    P = np.full(face.shape + (3,), np.nan)
+    m = face >= 0
     if m.any():
-        tri = F[buffers.face_id[m]]                       # (k, 3)
-        b = buffers.bary[m]                               # (k, 3)
-        P[m] = np.einsum("kj,kjd->kd", b, V[tri])
+        tri = F[face[m]]                                  # (k, 3)
+        P[m] = np.einsum("kj,kjd->kd", bary[m], V[tri])
     return P
 
 
