@@ -99,6 +99,7 @@ from autobones.rig_transfer.correspondence import dense_correspondence
 from autobones.geometry.topology import mesh_parts
 from autobones.io.mesh import load_mesh
 from autobones.rig_transfer.stick import stick
+from autobones.rig_transfer.symmetry import Symmetry
 from autobones.geometry.tps import ThinPlateSpline, landmark_arrays
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -143,7 +144,7 @@ def ict_jaw_prior(Vn, F, lm_n):
     return jaw_prior(autobones.transfer((Vn, F), lm_n))
 
 
-def families(quick, jaw=True):
+def families(quick, jaw=True, symmetric="off"):
     """Identities x expressions x variants, errors per region (module doc, ``--families``); ``jaw``:
     the source's jaw prior (:func:`ict_jaw_prior`) on, else off."""
     import fast_simplification
@@ -189,8 +190,10 @@ def families(quick, jaw=True):
                     scale, VT = 1000.0, 1000.0 * Vt
                 VT, FT = np.asarray(VT, dtype=np.float64), np.asarray(FT, dtype=np.int64)
                 t, info = time.perf_counter(), {}
-                R = dense_correspondence(Vn, F, VT, FT, lm_n, {n: scale * p for n, p in lm_t.items()}, jaw=prior,
-                                         details=info)[0]
+                lm_T = {n: scale * p for n, p in lm_t.items()}
+                sym = Symmetry(symmetric).fit(Vn, F, lm_n, VT, FT, lm_T)
+                R = dense_correspondence(Vn, F, VT, FT, lm_n, lm_T, jaw=prior, details=info,
+                                         symmetry=sym.fit_option())[0]
                 dt = time.perf_counter() - t
                 e = 100 * np.linalg.norm(R / scale - Vt, axis=1) / exex
                 for i, r in enumerate(REGIONS):
@@ -201,6 +204,7 @@ def families(quick, jaw=True):
                       + "  ".join(f"{r} {e[region == i].mean():.2f}/{np.percentile(e[region == i], 95):.2f}"
                                   for i, r in enumerate(REGIONS))
                       + (f"  jaw {info['jaw_deg']:.1f} deg ({info['jaw']['raw']:.2f})" if jaw else "")
+                      + (f"  symmetric {'on' if sym.applied_ else 'off'}" if symmetric != "off" else "")
                       + f"  ({dt:.1f} s)", flush=True)
 
     def table(rows, key_name):
@@ -226,9 +230,11 @@ def main(argv=None):
     ap.add_argument("--families", action="store_true", help="identities x expressions x variants, per region")
     ap.add_argument("--no-jaw-prior", action="store_true",
                     help="--families: fit without the source's jaw prior (the fit before issue #13's jaw prior)")
+    ap.add_argument("--symmetric", choices=("off", "auto", "on"), default="off",
+                    help="--families: the symmetric fit of autobones.rig_transfer.symmetry (default off)")
     args = ap.parse_args(argv)
     if args.families:
-        return families(args.quick, jaw=not args.no_jaw_prior)
+        return families(args.quick, jaw=not args.no_jaw_prior, symmetric=args.symmetric)
     mesh = {h: load_mesh(DATA / "ict" / f"{h}.obj") for h in HEADS}
     lms = {h: json.loads((DATA / "ict" / f"{h}.landmarks.json").read_text())["landmarks"] for h in HEADS}
     F = mesh[HEADS[0]][1]

@@ -4,6 +4,7 @@ Run by hand, not by the tests::
 
     python benchmarks/symmetry.py                 # goat, robot, ICT identity002, default head
     python benchmarks/symmetry.py goat robot      # some of them
+    python benchmarks/symmetry.py --compare       # each head with the symmetric fit off and auto
 
 Every head is rigged by ``autobones.transfer`` with its landmark file and
 ``ExpressionModel`` is fitted on it. The mirror plane is the landmarks' own
@@ -100,15 +101,15 @@ def symmetric_bumps(V, muscles, plane, width):
     return D
 
 
-def measure(name, mesh, marks):
-    """One row of the table (a dict) for one head."""
+def measure(name, mesh, marks, symmetric="auto"):
+    """One row of the table (a dict) for one head (``symmetric``: of ``autobones.transfer``)."""
     import autobones
     from autobones.expressions.model import ExpressionModel
     from autobones.rig_transfer.pipeline import load_generic
 
     t0 = time.perf_counter()
     details = {}
-    rig = autobones.transfer(mesh, marks, details=details)
+    rig = autobones.transfer(mesh, marks, details=details, symmetric=symmetric)
     model = ExpressionModel().fit(rig)
     seconds = time.perf_counter() - t0
     lm = {k: np.asarray(v) for k, v in rig.landmarks.items()}
@@ -136,20 +137,24 @@ def measure(name, mesh, marks):
             "wires": (wire.mean(), wire.max()), "happy": displacement_asymmetry(V, happy, plane, skin),
             "AU12": displacement_asymmetry(V, au12, plane, skin),
             "L/R": size[side > 0].sum() / max(size[side < 0].sum(), 1e-300),
-            "floor": displacement_asymmetry(V, floor, plane, skin)}
+            "floor": displacement_asymmetry(V, floor, plane, skin),
+            "symmetric": "on" if rig.options["symmetric"]["applied"] else "off"}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("heads", nargs="*", choices=[[]] + list(HEADS), help="default: all four")
+    ap.add_argument("--compare", action="store_true", help="each head with transfer(symmetric='off') and 'auto'")
     args = ap.parse_args(argv)
-    print("| head | lm % | corr % | origins % | insertions % | wires % | happy | AU12 | L/R | floor | s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| head | symmetric fit | lm % | corr % | origins % | insertions % | wires % | happy | AU12 | L/R | floor | s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in args.heads or list(HEADS):
-        r = measure(name, *HEADS[name])
-        pair = lambda k: f"{r[k][0]:.1f} / {r[k][1]:.1f}"  # noqa: E731
-        print(f"| {name} | {pair('lm')} | {pair('corr')} | {pair('origins')} | {pair('insertions')} | {pair('wires')} "
-              f"| {r['happy']:.2f} | {r['AU12']:.2f} | {r['L/R']:.2f} | {r['floor']:.2f} | {r['s']:.1f} |", flush=True)
+        for mode in ("off", "auto") if args.compare else ("auto",):
+            r = measure(name, *HEADS[name], symmetric=mode)
+            pair = lambda k: f"{r[k][0]:.1f} / {r[k][1]:.1f}"  # noqa: E731
+            print(f"| {name} | {mode}: {r['symmetric']} | {pair('lm')} | {pair('corr')} | {pair('origins')} | "
+                  f"{pair('insertions')} | {pair('wires')} | {r['happy']:.2f} | {r['AU12']:.2f} | {r['L/R']:.2f} | "
+                  f"{r['floor']:.2f} | {r['s']:.1f} |", flush=True)
 
 
 if __name__ == "__main__":

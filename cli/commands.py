@@ -56,7 +56,7 @@ def cmd_transfer(args):
     _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
     rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
-                             arkit=args.arkit)
+                             arkit=args.arkit, symmetric=args.symmetric)
     written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
     if rig.options.get("landmarks_source") == "detected":
         conf = rig.landmark_confidence or {}

@@ -74,6 +74,12 @@ def add_transfer(sub):
                         "jawOpen, ...; Left = the subject's left), made for this head from ICT-FaceKit's set (or the "
                         "--rig folder's own set, build-rig --shapes) by deformation transfer; tongueOut is "
                         "written empty (ICT has none)")
+    t.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
+                   help="keep the dense correspondence mirror-symmetric, so a symmetric head's points do not slide "
+                        "across its midline: auto (default) when the head's landmark pairs are mirror images (within "
+                        "1%% of the eye-corner distance) and the head and the rig's skin are symmetric about their "
+                        "landmarks' planes (sculpts, cartoons, robots; not real scans, whose own asymmetry the rig "
+                        "follows, nor a one-sided expression); the sidecar's options.symmetric says what was measured")
     _common(t)
 
 

@@ -85,6 +85,10 @@ far as the landmarks say and the posed skin is what the TPS warps and the shape 
 result is still one point per source vertex). Closed-mouth targets (estimate within 3 degrees of
 rest) are fitted exactly as without it.
 
+A symmetric head (``symmetry=``, :mod:`autobones.rig_transfer.symmetry`): after every solve each source
+vertex is averaged with the reflection of its mirror partner's fitted point, so a smooth symmetric head's
+points cannot drift across its midline.
+
 Multi-part meshes (ICT: skin, eyeballs, teeth, gums, mouth socket, ... 56
 parts): the parts are the connected components of each mesh. After the TPS
 warp every source part votes, by the target part of its vertices' nearest
@@ -114,6 +118,7 @@ from ..geometry.validate import mesh_arrays
 from ..geometry.tps import ThinPlateSpline, as_points, landmark_arrays
 from .jaw_prior import check_prior, estimate_jaw_angle, open_jaw
 from .stick import stick
+from .symmetry import mirror_operator, symmetrize
 
 log = logging.getLogger(__name__)
 
@@ -320,7 +325,7 @@ def _target_terms(tgt, V_tgt, F_tgt):
 
 
 def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark_weight, boundary_weight, max_angle,
-         restrict_parts, exact, edge_reference, symmetric_weight, tgt):
+         restrict_parts, exact, edge_reference, symmetric_weight, symmetry, tgt):
     """Staged least squares of :func:`fit_surface` from ``X0`` (default: the TPS warp); returns X, labels, seconds."""
     t1 = time.perf_counter()
     n = len(V_src)
@@ -366,6 +371,8 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
     if X0 is not None:
         X = X0.copy()
     match = _Matcher(V_tgt, F_tgt, tgt, labels, in_face, bidx, btrees, cos_max, exact, symmetric_weight, reverse)
+    if symmetry is not None:
+        mirror, partnered = mirror_operator(V_src, F_src, symmetry["source_plane"], symmetry["partner_tol"])
     # --- staged least squares
     for lam in stages:
         # the fit runs on a coarse copy (about 8k vertices), where both orderings take the same time;
@@ -378,6 +385,8 @@ def _fit(V_src, F_src, V_tgt, F_tgt, P, Q, tps, X0, stages, iterations, landmark
             n_edge /= np.maximum(np.linalg.norm(n_edge, axis=1, keepdims=True), 1e-12)
             rhs = w[:, None] * C + lam * (D.T @ rotate_between(n_edge_src, n_edge, edge_src)) + BtQ
             X = solve(rhs)
+            if symmetry is not None:
+                X = symmetrize(X, mirror, partnered, symmetry["target_plane"])
     t3 = time.perf_counter()
     return X, labels, (t2 - t1, t3 - t2)
 
@@ -432,7 +441,7 @@ class _Matcher:
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
                 landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="blend", symmetric_weight=10.0, coarse_vertices=8000,
-                fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None):
+                fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None, symmetry=None):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
     Parameters
@@ -487,6 +496,11 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
     details : dict, optional
         Filled with ``jaw_deg`` (float, the jaw opening used; 0 without ``jaw``) and ``jaw``
         (the estimate's details) when ``jaw`` is given.
+    symmetry : dict, optional
+        Keep the fit symmetric (:mod:`autobones.rig_transfer.symmetry`): ``source_plane`` and
+        ``target_plane`` (unit normal, offset; each mesh's frame) and ``partner_tol`` (source
+        units: a source vertex whose reflection is further from the source surface has no
+        partner), from :meth:`autobones.rig_transfer.symmetry.Symmetry.fit_option`. None: off.
 
     Returns
     -------
@@ -517,7 +531,8 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         details["jaw_deg"] = 0.0
     tps = ThinPlateSpline().fit(P, Q)
     t1 = time.perf_counter()
-    args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight, {})
+    args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight,
+            symmetry, {})
     X, labels, t_setup, t_fit = _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices,
                                                 (stages, iterations), (fine_stages, fine_iterations), args)
     if timings is not None:

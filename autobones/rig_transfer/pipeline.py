@@ -32,6 +32,7 @@ from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
 from .fields import transfer_fields
+from .symmetry import Symmetry
 from .under_skin import carry_muscles, under_skin_warp
 from ..errors import AutobonesError
 from ..io.jsonable import jsonable
@@ -128,7 +129,7 @@ def generic_jaw_prior(generic, rig=None):
 
 
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
-             **fit_options):
+             symmetric="auto", **fit_options):
     """Carry the generic rig onto a landmarked head.
 
     Parameters
@@ -153,6 +154,12 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     arkit : bool
         Also make the 52 ARKit shapes on this head (:func:`autobones.arkit.targets.arkit_targets`):
         ``rig.arkit_targets`` and the ``rig.arkit`` record; ``save`` writes them as morph targets.
+    symmetric : {"auto", "on", "off"}
+        Keep the correspondence mirror-symmetric (:mod:`autobones.rig_transfer.symmetry`): ``auto``
+        when the head's landmark pairs are mirror images and the head and the generic skin are
+        symmetric about their landmarks' planes (sculpts, cartoons, robots; not real scans, whose
+        asymmetry the rig must follow, nor a one-sided expression); ``rig.options['symmetric']``
+        says what was measured and done.
     **fit_options
         Options of :func:`autobones.rig_transfer.correspondence.fit_surface`; ``jaw`` defaults to the
         generic rig's articulated jaw prior (:func:`generic_jaw_prior`; ``jaw=None`` fits without it).
@@ -180,6 +187,11 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
             src = {n: mirror[n] for n in shared}
         lap("generic_landmarks")
     dst = {n: lm[n] for n in shared}
+    # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there
+    # the correspondence is kept symmetric
+    symmetry = Symmetry(symmetric).fit(generic.vertices, generic.faces, src, V, F, dst)
+    fit_options.setdefault("symmetry", symmetry.fit_option())
+    lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
     pending = None
     if arkit:
@@ -224,7 +236,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",
                "rig": rig_option,
-               "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3)}
+               "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
+               "symmetric": symmetry.record_}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
