@@ -4,7 +4,7 @@ Run by hand, not by the tests::
 
     python benchmarks/symmetry.py                 # goat, robot, ICT identity002, default head
     python benchmarks/symmetry.py goat robot      # some of them
-    python benchmarks/symmetry.py --compare       # each head with the symmetric fit off and auto
+    python benchmarks/symmetry.py --compare       # each head with the symmetric fit off, auto and on
 
 Every head is rigged by ``autobones.transfer`` with its landmark file and
 ``ExpressionModel`` is fitted on it. The mirror plane is the landmarks' own
@@ -144,12 +144,12 @@ def measure(name, mesh, marks, symmetric="auto"):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("heads", nargs="*", choices=[[]] + list(HEADS), help="default: all four")
-    ap.add_argument("--compare", action="store_true", help="each head with transfer(symmetric='off') and 'auto'")
+    ap.add_argument("--compare", action="store_true", help="each head with transfer(symmetric='off'), 'auto' and 'on'")
     args = ap.parse_args(argv)
     print("| head | symmetric fit | lm % | corr % | origins % | insertions % | wires % | happy | AU12 | L/R | floor | s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in args.heads or list(HEADS):
-        for mode in ("off", "auto") if args.compare else ("auto",):
+        for mode in ("off", "auto", "on") if args.compare else ("auto",):
             r = measure(name, *HEADS[name], symmetric=mode)
             pair = lambda k: f"{r[k][0]:.1f} / {r[k][1]:.1f}"  # noqa: E731
             print(f"| {name} | {mode}: {r['symmetric']} | {pair('lm')} | {pair('corr')} | {pair('origins')} | "
