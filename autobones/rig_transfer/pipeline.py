@@ -218,7 +218,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
-    under = under_skin_warp(generic.vertices, P, ok, control_points)
+    under = under_skin_warp(generic.vertices, P, ok, control_points, partners=symmetry.partners(generic.vertices,
+                                                                                              generic.faces))
     skeleton = generic.skeleton.transformed(under.transform)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")

@@ -163,6 +163,15 @@ class Symmetry:
         self.record_["applied"] = bool(self.applied_)
         return self
 
+    def partners(self, V_src, F_src):
+        """(n,) int64: each generic vertex's mirror partner (the vertex nearest its reflection's closest
+        surface point), or None when not applied."""
+        if not self.applied_:
+            return None
+        M, has = mirror_operator(V_src, F_src, self.source_plane_, MAX_PARTNER * self.unit_s_)
+        out = np.asarray(M.argmax(axis=1)).ravel()
+        return np.where(has, out, np.arange(len(V_src)))
+
     def fit_option(self):
         """``symmetry=`` of :func:`autobones.rig_transfer.correspondence.fit_surface`, or None."""
         if not self.applied_:

@@ -63,7 +63,7 @@ def ride(points, V_src, F_src, P):
     return np.einsum("ki,kij->kj", bary, P[F_src[face]])
 
 
-def under_skin_warp(V_src, P, reliable, control_points):
+def under_skin_warp(V_src, P, reliable, control_points, partners=None):
     """The thin-plate spline source -> target fitted on a spread subsample of the correspondence.
 
     Parameters
@@ -76,14 +76,21 @@ def under_skin_warp(V_src, P, reliable, control_points):
         Trusted correspondences; all are used when fewer than 20 are trusted.
     control_points : int
         Size of the subsample.
+    partners : (n,) int or None
+        Each source vertex's mirror partner (a symmetric correspondence,
+        :mod:`autobones.rig_transfer.symmetry`): the subsample then holds each point's partner too,
+        so the warp, and what it carries, is as symmetric as the correspondence.
 
     Returns
     -------
     ThinPlateSpline
         Regularised (1e-3), source frame -> target frame.
     """
-    good = np.flatnonzero(reliable) if reliable.sum() >= 20 else np.arange(len(P))
+    ok = reliable if partners is None else reliable & reliable[partners]
+    good = np.flatnonzero(ok) if ok.sum() >= 20 else np.arange(len(P))
     idx = good[spread_subsample(V_src[good], control_points)]
+    if partners is not None:
+        idx = np.unique(np.concatenate([idx, partners[idx]]))
     return ThinPlateSpline(regularization=1e-3).fit(V_src[idx], P[idx])
 
 
