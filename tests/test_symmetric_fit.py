@@ -80,8 +80,8 @@ def test_a_real_scan_keeps_its_own_asymmetry():
     assert not rig.options["symmetric"]["applied"]
     # both gates hold it back: its published landmark pairs and its surface are no mirror images
     assert rig.options["symmetric"]["landmark_mismatch"] > 0.01                       # measured 0.048
-    _, far = surface_asymmetry(V, F, symmetry_plane(lm), _exex(lm))
-    assert np.percentile(far, 75) > 0.025                                              # measured 0.055
+    far = surface_asymmetry(V, F, symmetry_plane(lm), _exex(lm))
+    assert np.percentile(far, 75) > 0.025                                              # measured 0.037
 
 
 def test_a_one_sided_expression_or_a_goat_is_left_as_it_is():
