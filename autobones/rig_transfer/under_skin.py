@@ -88,8 +88,10 @@ def under_skin_warp(V_src, P, reliable, control_points, partners=None):
     """
     ok = reliable if partners is None else reliable & reliable[partners]
     good = np.flatnonzero(ok) if ok.sum() >= 20 else np.arange(len(P))
-    idx = good[spread_subsample(V_src[good], control_points)]
-    if partners is not None:
+    if partners is None:
+        idx = good[spread_subsample(V_src[good], control_points)]
+    else:   # half as many, each with its partner: as many points, as spread
+        idx = good[spread_subsample(V_src[good], (control_points + 1) // 2)]
         idx = np.unique(np.concatenate([idx, partners[idx]]))
     return ThinPlateSpline(regularization=1e-3).fit(V_src[idx], P[idx])
 
