@@ -197,7 +197,8 @@ def cmd_batch(args):
     from autobones.batch import make_options, run_batch, summary_table
 
     options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
-                           expressions="sides" if args.expression_sides else args.expressions, arkit=args.arkit)
+                           expressions="sides" if args.expression_sides else args.expressions, arkit=args.arkit,
+                           symmetric=args.symmetric)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
 

@@ -177,6 +177,8 @@ def add_batch(sub):
     a.add_argument("--arkit", action="store_true",
                    help="with --transfer: ARKit's 52 face blendshapes as morph targets in each glb "
                         "(see transfer --help)")
+    a.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
+                   help="with --transfer: keep each correspondence mirror-symmetric (see transfer --help; default auto)")
     a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
     a.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "

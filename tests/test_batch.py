@@ -283,6 +283,24 @@ def test_planner_skips_only_complete_matching_outputs(tmp_path):
     assert plan(heads, out, opts)[0].action == "fail"
 
 
+def test_symmetric_option_reaches_the_transfer_and_its_hash(tmp_path):
+    """--symmetric off/on is part of a transfer batch's options (and hash); auto, the default, leaves
+    the hash as it was; place refuses it."""
+    heads, out = tmp_path / "heads", tmp_path / "rigs"
+    copy("misc/robot_head_neutral.obj", heads / "a.obj")
+    lm = Path(__file__).resolve().parent / "landmarks" / "robot_head_neutral.landmarks.json"
+    (heads / "a.landmarks.json").write_bytes(lm.read_bytes())
+    auto, off = make_options(transfer=True), make_options(transfer=True, symmetric="off")
+    assert "symmetric" not in auto and off["symmetric"] == "off" and options_hash(auto) != options_hash(off)
+    [item] = plan(heads, out, off)
+    rec = rig_one(item.input, item.output, off)
+    assert rec["status"] == "ok", rec
+    side = json.loads((out / "a.rig.json").read_text())
+    assert side["options"]["symmetric"]["mode"] == "off" and not side["options"]["symmetric"]["applied"]
+    with pytest.raises(AutobonesError, match="add --transfer"):
+        make_options(symmetric="on")
+
+
 def test_rig_one_never_raises(tmp_path, monkeypatch):
     import autobones
 

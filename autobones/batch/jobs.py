@@ -21,21 +21,27 @@ LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
 # ---------------------------------------------------------------------------------------------
 # options and naming
 
-def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False, arkit=False):
+def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False, arkit=False,
+                 symmetric="auto"):
     """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
 
     ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
     options mean the same thing on every worker. ``expressions`` (transfer only: True or
     ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
     when set, so other batches keep their options hash. ``arkit`` (transfer only) adds the 52
-    ARKit shapes (``transfer(..., arkit=True)``), the same way.
+    ARKit shapes (``transfer(..., arkit=True)``), the same way, and so does ``symmetric`` (transfer
+    only) when not ``"auto"`` (``transfer(..., symmetric=...)``).
     """
     from ..placement.facial_bones import DENSITIES, bone_count
 
     if transfer:
         return {"mode": "transfer", "density": None,
                 "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
-                **({"expressions": expressions} if expressions else {}), **({"arkit": True} if arkit else {})}
+                **({"expressions": expressions} if expressions else {}), **({"arkit": True} if arkit else {}),
+                **({"symmetric": symmetric} if symmetric != "auto" else {})}
+    if symmetric != "auto":
+        raise AutobonesError("--symmetric chooses how a transfer's correspondence is fitted, which place does not "
+                             "use; add --transfer")
     if arkit:
         raise AutobonesError("--arkit needs landmarks and a transfer, which place does not use; add --transfer")
     if expressions:
@@ -151,7 +157,8 @@ def _make_rig(input_path, options, record):
         # a mesh without a landmark file beside it gets automatic landmarks (human faces)
         lm = landmarks_for(input_path)
         record["landmarks"] = lm if lm is not None else "detected"
-        return autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")))
+        return autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")),
+                                  symmetric=options.get("symmetric", "auto"))
     raise AutobonesError(f"unknown batch mode {mode!r}; use 'place' or 'transfer'")
 
 
