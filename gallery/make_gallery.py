@@ -262,6 +262,43 @@ def head_turn_picture(out, degrees=15.0, size=360):
     print(f"{path}: {', '.join(TURN_HEADS)}, head turned {degrees:g} degrees")
 
 
+def symmetric_picture(out, size=360):
+    """``transfer_symmetric_robot.png``: the robot transferred with the symmetric fit off (top) and on
+    (bottom, ``--symmetric auto``), posed happy; front and up-from-below views tinted by motion, each
+    row labelled with how much more the left moves than the right (area-weighted)."""
+    from autobones.expressions.model import ExpressionModel
+    from autobones.geometry.areas import vertex_areas
+    from autobones.landmarks.refine import symmetry_plane
+
+    mesh, marks = TRANSFERS["robot"]
+    rows, poses = [], []
+    for mode in ("off", "auto"):
+        rig = autobones.transfer(DATA / mesh, HERE.parent / marks, symmetric=mode)
+        poses.append((mode, rig, ExpressionModel().fit(rig).pose(expression="happiness")))
+    top = max(float(np.linalg.norm(P - rig.vertices, axis=1).max()) for _, rig, P in poses)
+    for mode, rig, P in poses:
+        motion = np.linalg.norm(P - rig.vertices, axis=1)
+        normal, offset = symmetry_plane({k: np.asarray(v) for k, v in rig.landmarks.items()})
+        side = rig.vertices @ normal - offset
+        area = vertex_areas(rig.vertices, rig.faces)   # area-weighted: the robot's vertices are not mirror pairs
+        ratio = (area * motion)[side > 0].sum() / max((area * motion)[side < 0].sum(), 1e-300)
+        a = np.clip(motion / top, 0.0, 1.0)[:, None] ** 0.7
+        colours = (1 - a) * np.array([0.85, 0.85, 0.85]) + a * np.array([1.0, 0.45, 0.1])
+        C = rig.frame.to_canonical(P)
+        note = f"symmetric {mode}: left moves {ratio:.2f}x the right"
+        mark = np.array([[C[:, 0].min(), C[:, 1].min() - 0.04, C[:, 2].max()]])
+        rows.append(np.concatenate([
+            render.render_views(C, rig.faces, vertex_colors=colours, views=(view,), size=(size, size),
+                                points=mark if k == 0 else None, point_labels=[note] if k == 0 else None,
+                                point_color=(40, 40, 40))
+            for k, view in enumerate(("front", "three_quarter"))], axis=1))
+        print(f"robot, symmetric {mode} ({'applied' if rig.options['symmetric']['applied'] else 'not applied'}): "
+              f"happiness left/right motion {ratio:.3f}")
+    path = Path(out) / "transfer_symmetric_robot.png"
+    render.save_png(path, np.concatenate(rows, axis=0))
+    print(f"{path}: the robot's happiness, symmetric fit off and auto")
+
+
 ARKIT_HEADS = {  # label: (mesh under ../shared/data, landmark file under ../shared/data or the project)
     "james (scan)": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
     "ICT identity002 (sculpt)": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
@@ -418,14 +455,16 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
-                    + ["expressions", "jaw_open_goat_robot", "place_head_turn"] + ARKIT_PICTURES + ["arkit"],
+                    + ["expressions", "jaw_open_goat_robot", "place_head_turn", "transfer_symmetric_robot"]
+                    + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
     ap.add_argument("--out", default=str(HERE))
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
-                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn"] + ARKIT_PICTURES)
+                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn", "transfer_symmetric_robot"]
+                          + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
                                          ARKIT_PICTURES if n == "arkit" else [n])]
@@ -441,6 +480,9 @@ def main(argv=None):
             continue
         if name == "place_head_turn":
             head_turn_picture(args.out)
+            continue
+        if name == "transfer_symmetric_robot":
+            symmetric_picture(args.out)
             continue
         if name.startswith("expressions_"):
             expression_picture(name[len("expressions_"):], args.out)
