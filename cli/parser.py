@@ -79,7 +79,8 @@ def add_transfer(sub):
                         "across its midline: auto (default) when the head's landmark pairs are mirror images (within "
                         "1%% of the eye-corner distance) and the head and the rig's skin are symmetric about their "
                         "landmarks' planes (sculpts, cartoons, robots; not real scans, whose own asymmetry the rig "
-                        "follows, nor a one-sided expression); the sidecar's options.symmetric says what was measured")
+                        "follows, nor a one-sided expression, nor automatic landmarks); the sidecar's options.symmetric "
+                        "says what was measured")
     _common(t)
 
 

@@ -32,7 +32,7 @@ from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
 from .fields import transfer_fields
-from .symmetry import Symmetry
+from .symmetry import MAX_LANDMARK_MISMATCH, Symmetry
 from .under_skin import carry_muscles, under_skin_warp
 from ..errors import AutobonesError
 from ..io.jsonable import jsonable
@@ -158,8 +158,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         Keep the correspondence mirror-symmetric (:mod:`autobones.rig_transfer.symmetry`): ``auto``
         when the head's landmark pairs are mirror images and the head and the generic skin are
         symmetric about their landmarks' planes (sculpts, cartoons, robots; not real scans, whose
-        asymmetry the rig must follow, nor a one-sided expression); ``rig.options['symmetric']``
-        says what was measured and done.
+        asymmetry the rig must follow, nor a one-sided expression, nor automatic landmarks);
+        ``rig.options['symmetric']`` says what was measured and done.
     **fit_options
         Options of :func:`autobones.rig_transfer.correspondence.fit_surface`; ``jaw`` defaults to the
         generic rig's articulated jaw prior (:func:`generic_jaw_prior`; ``jaw=None`` fits without it).
@@ -189,7 +189,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     dst = {n: lm[n] for n in shared}
     # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there
     # the correspondence is kept symmetric
-    symmetry = Symmetry(symmetric).fit(generic.vertices, generic.faces, src, V, F, dst)
+    # (not on automatic landmarks: their mirror plane is a degree off, and symmetrising about it moves points)
+    symmetry = Symmetry(symmetric, 0.0 if detected is not None else MAX_LANDMARK_MISMATCH).fit(
+        generic.vertices, generic.faces, generic.landmarks, V, F, dst)   # the rig's own landmarks: its exact plane
     fit_options.setdefault("symmetry", symmetry.fit_option())
     lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
