@@ -187,11 +187,11 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
             src = {n: mirror[n] for n in shared}
         lap("generic_landmarks")
     dst = {n: lm[n] for n in shared}
-    # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there
-    # the correspondence is kept symmetric
-    # (not on automatic landmarks: their mirror plane is a degree off, and symmetrising about it moves points)
+    # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there the
+    # correspondence is kept symmetric (not with automatic landmarks, whose mirror plane is a degree off);
+    # the rig's own landmarks give its exact plane
     symmetry = Symmetry(symmetric, 0.0 if detected is not None else MAX_LANDMARK_MISMATCH).fit(
-        generic.vertices, generic.faces, generic.landmarks, V, F, dst)   # the rig's own landmarks: its exact plane
+        generic.vertices, generic.faces, generic.landmarks, V, F, dst)
     fit_options.setdefault("symmetry", symmetry.fit_option())
     lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
@@ -220,8 +220,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
-    under = under_skin_warp(generic.vertices, P, ok, control_points, partners=symmetry.partners(generic.vertices,
-                                                                                              generic.faces))
+    partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
+    under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
