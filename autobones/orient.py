@@ -15,7 +15,9 @@ Method
    cut at its far end (a flat base or an open rim: neck cut, bust base), it is
    down -- unless the mesh is a face-only capture: an open shell (its
    area-weighted normals sum to a large part of its area) faces away from its
-   opening, which is then its back, and only the fronts along that way stay. The remaining choices are scored by how well the head's top slice
+   opening, which is then its back, and only the fronts along that way stay. When two directions look
+   clearly cut (a neck cut slanted down and back shows at the bottom and at the back), the bottom is one
+   of them and only their choices stay. The remaining choices are scored by how well the head's top slice
    (1.2 head widths tall, so shoulders and bust bases don't count) overlays the
    same slice of a reference head (the built-in default head): a trimmed
    similarity ICP that may turn by at most 35 degrees, so a tilted head still
@@ -212,6 +214,11 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             ref = front_part if len(front_part) >= 0.1 * len(ref) else ref
         elif winner is not None:
             candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
+        elif len(ranked) > 2 and ranked[1] > 0.02 and ranked[1] > 1.5 * ranked[2]:
+            # two directions look cut (a neck cut slanted down and back shows at the bottom and at the
+            # back): the bottom is one of them, and only their candidates are scored
+            pair = sorted(bases, key=bases.get, reverse=True)[:2]
+            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) in pair]
     if len(candidates) > 1:
         # independent ICPs whose time is in the k-d tree queries, which release the GIL: threads
         # give the same scores in about half the time on two cores
