@@ -159,16 +159,19 @@ class LandmarkDetector:
     max_turn: float = 10.0
     detector: object = None
 
-    def detect(self, V, F, frame=None, what="the head"):
+    def detect(self, V, F, frame=None, what="the head", up=None, front=None):
         """Landmarks of the mesh ``(V, F)``; ``frame`` from :func:`autobones.orient.detect_frame`
-        (found when None). Returns :class:`DetectedLandmarks`; raises AutobonesError when no face
-        is found."""
+        (found when None, with ``up`` and ``front`` as given). Returns :class:`DetectedLandmarks`;
+        raises AutobonesError when no face is found."""
         V = np.asarray(V, dtype=np.float64)
         F = np.asarray(F, dtype=np.int64)
-        frame = detect_frame(V, F) if frame is None else frame
-        # the frame from the whole mesh: a clustered copy's rim and flat cut read differently;
+        # the frame from the whole mesh (a clustered copy's rim and flat cut read differently), found
+        # on a second thread while the pictured copy is made: both are mostly numpy outside the GIL;
         # the skin is the same in every frame the loop below tries
-        Vp, Fp, skin_in, skin = pictured_mesh(V, F)
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            pending = pool.submit(detect_frame, V, F, up, front) if frame is None else None
+            Vp, Fp, skin_in, skin = pictured_mesh(V, F)
+            frame = frame if pending is None else pending.result()
         # the landmarks end on the input's own skin (None: the pictured mesh is the input)
         snap = None if Vp is V else (V, F if skin_in.all() else F[skin_in])
         V, F = Vp, Fp
@@ -378,5 +381,4 @@ def detect_landmarks(mesh, up=None, front=None, name=None, **options):
         optional detector is not installed.
     """
     V, F, source = resolve_mesh(mesh)
-    frame = detect_frame(V, F, up=up, front=front)
-    return LandmarkDetector(**options).detect(V, F, frame=frame, what=name or source or "the head")
+    return LandmarkDetector(**options).detect(V, F, what=name or source or "the head", up=up, front=front)
