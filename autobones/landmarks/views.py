@@ -146,9 +146,8 @@ def lift(points_at, covered, px, reach=3):
         d = np.where(valid, d, np.inf).reshape(len(rest), -1)
         best = np.argmin(d, axis=1)
         near = np.isfinite(d[np.arange(len(rest)), best])
-        rr, qq = r.reshape(len(rest), -1), q.reshape(len(rest), -1)
-        pick = np.arange(len(rest))[near]
-        out[rest[near]] = points_at(rr[pick, best[near]], qq[pick, best[near]])
+        pick = np.flatnonzero(near)
+        out[rest[pick]] = points_at(r.reshape(len(rest), -1)[pick, best[pick]], q.reshape(len(rest), -1)[pick, best[pick]])
     return out
 
 
