@@ -1,0 +1,493 @@
+"""Layered soft tissue under the skin, solved to static equilibrium (Lee, Terzopoulos & Waters 1995, §4-7).
+
+Below every skin triangle over bone stands a prism of three node layers: the epidermis (the skin
+itself), the fascia (the bottom of the dermal-fatty layer) and the skull estimate (the bottom of
+the muscle layer). Springs join the nodes within each layer and between layers (vertical and
+crossed); the dermal-fatty springs are biphasic, soft up to a strain and stiff beyond it. Each
+layer keeps its volume: a column whose layer is squeezed sideways grows taller by as much (the
+paper's volume force pushes the epidermal nodes along their normal by the volume lost), so skin
+over a shortening muscle bulges. The muscles act on the fascia nodes; epidermis and fascia may
+not enter the skull and slide along it freely.
+
+The paper integrates the equations of motion explicitly. Here each pose is the static equilibrium
+of the same energies, found by local/global iterations (the "projective dynamics" of Bouaziz,
+Martin, Liu, Kavan & Pauly 2014): every term is a squared distance to a projection (a spring to
+its rest length, a column to the height that keeps its volume, a node to the skull's outside), the projections are
+made per element, and one sparse system, factorised once per head, pulls them together. A pose
+is therefore deterministic, and a rest pose is its own equilibrium exactly.
+
+Seed 000's wire deformer stays the driver (Bibliowicz 2005): the muscle force on a fascia node is
+its pull, along the skull, toward where the wire-deformed skin carries it; the skull nodes follow
+the bones (jaw, lids, head); epidermis and fascia find their own place above them. The tissue
+covers the face over the skull and mandible; the skin beyond it (the lips, whose inner surfaces
+face each other, the eyelids, scalp and neck) takes the tissue's correction fading out past its
+border, and no skin triangle the wires leave the right way up is turned over.
+
+Everything is canonical (+Y up, +Z front, head sizes), like :class:`~autobones.expressions.model.ExpressionModel`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+from ..errors import AutobonesError
+from ..geometry.laplacian import factor_spd
+from ..geometry.normals import cross_rows, triangle_normals
+from ..geometry.smooth import smoothstep
+from ..geometry.topology import mesh_edges
+
+
+@dataclass
+class _Springs:
+    """Springs between nodes ``a`` and ``b`` (s,) with rest lengths ``rest`` (s,) and weights
+    ``weight`` (s,); ``limit`` (s,) the deformation ratio past which the second phase's extra
+    weight ``weight2`` (s,) acts (inf: one phase)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    rest: np.ndarray
+    weight: np.ndarray
+    limit: np.ndarray
+    weight2: np.ndarray
+
+
+def _prism_tets(top, bottom):
+    """The three tetrahedra (3, 4) of node-index arrays that split prisms ``top`` (e, 3) over
+    ``bottom`` (e, 3) (bottom[:, k] under top[:, k]); each tet as (e, 4)."""
+    a, b, c = top.T
+    a_, b_, c_ = bottom.T
+    return [np.stack(t, axis=1) for t in ((a, b, c, a_), (b, c, a_, b_), (c, a_, b_, c_))]
+
+
+def prism_volumes(X, top, bottom):
+    """Volumes (e,) of prisms with corners ``X[top]`` over ``X[bottom]`` (``X`` (N, 3)).
+
+    Positive when the top triangle's normal (right hand, corners in order) points away from
+    the bottom; each prism is the sum of its three tetrahedra, so the sum over prisms sharing
+    faces is the volume they fill.
+    """
+    vol = np.zeros(len(top))
+    for t in _prism_tets(top, bottom):
+        p0 = X[t[:, 0]]
+        vol += (cross_rows(X[t[:, 1]] - p0, X[t[:, 2]] - p0) * (X[t[:, 3]] - p0)).sum(axis=1)
+    # (a, b, c, a') with a' below an outward (a, b, c) is negative: flip to a positive volume
+    return -vol / 6.0
+
+
+class TissueModel:
+    """The layered tissue of Lee, Terzopoulos & Waters 1995 on one fitted expression model.
+
+    Stiffnesses are per unit area and squared strain (strain of a spring: its length change over
+    its rest length; of a node held to a target: the distance over the local tissue thickness),
+    so the same numbers behave the same on any head, mesh density and unit.
+
+    Parameters
+    ----------
+    dermal_fraction : float
+        Depth of the fascia below the skin as a fraction of the soft-tissue thickness (the rest
+        is the muscle layer, down to the skull estimate).
+    epidermis, fascia, muscle_layer : float
+        Spring stiffness within the epidermis, within the fascia, and of the muscle layer's
+        vertical and crossed springs.
+    compression : float
+        Stiffness of the epidermis and fascia springs when compressed, as a fraction of their
+        stiffness when stretched (skin wrinkles rather than pushes back).
+    blend : float
+        Distance (face units, along the skin) over which the tissue's correction fades out
+        past the tissue's border.
+    dermal : (float, float)
+        The biphasic dermal-fatty springs' stiffness below and above ``biphasic`` (the paper's
+        30 and 70).
+    biphasic : float
+        Stretch (deformation ratio minus 1) where the dermal-fatty springs stiffen.
+    volume : float
+        Weight holding each column of each layer at the height that keeps its volume (its rest
+        area times height over its current area: the volume preservation of §6).
+    drive : float
+        Weight pulling each fascia node toward where the wire-deformed skin carries it (the
+        muscle forces of §5).
+    rest : float
+        Weight pulling each epidermal node toward the wire result (the paper's weak force
+        restoring a node to its rest position).
+    contact : float
+        Weight of skull non-penetration (§7); the result is also projected out of the skull at the
+        end, so no node is ever left inside it.
+    regions : sequence of str or None
+        Region labels (the rig's ``region`` field) whose skin gets tissue: the face over the
+        skull and mandible. Scalp, ears and neck keep the wire result (no expression muscle
+        moves them, and the neck has no bone close under it); the eyelids too, whose skin
+        turns with the lid joints over the eyeball. None: all skin over bone (also what a rig
+        without a region field gets).
+    iterations : int
+        Local/global iterations per pose (at most).
+    tolerance : float
+        Stop earlier once the nodes' steps in one iteration, each over its tissue thickness,
+        have a root mean square below this.
+    acceleration : int
+        Steps of history in the Anderson acceleration of the iterations (0: plain local/global).
+
+    Attributes (after :meth:`fit`)
+    -------------------------------
+    columns_ : (c,) int64
+        Welded skin vertices (``model.surface_``) that carry a tissue column.
+    elements_ : (e, 3) int64
+        Skin triangles over bone, as column indices, wound so their normal points out.
+    free_ : (c,) bool
+        Columns whose epidermis and fascia are solved for (the rest keep the wire result).
+    rest_nodes_ : (3c, 3) float
+        Rest nodes, layer by layer (epidermis, fascia, skull), canonical frame, head sizes.
+    thickness_ : (c,) float
+        Soft-tissue thickness per column, head sizes.
+    rest_volume_ : float
+        Total tissue volume at rest, head sizes cubed.
+    """
+
+    def __init__(self, dermal_fraction=0.4, epidermis=60.0, fascia=60.0, muscle_layer=10.0, dermal=(30.0, 70.0),
+                 biphasic=0.1, volume=3000.0, drive=100.0, rest=0.5, contact=1000.0,
+                 regions=("forehead", "brow", "nose", "cheeks", "chin", "jaw"), iterations=40, tolerance=1e-3,
+                 acceleration=5, compression=0.1, blend=0.15, patch_rings=1):
+        self.dermal_fraction = dermal_fraction
+        self.epidermis = epidermis
+        self.fascia = fascia
+        self.muscle_layer = muscle_layer
+        self.dermal = dermal
+        self.biphasic = biphasic
+        self.volume = volume
+        self.drive = drive
+        self.rest = rest
+        self.contact = contact
+        self.regions = regions
+        self.iterations = iterations
+        self.acceleration = acceleration
+        self.compression = compression
+        self.blend = blend
+        self.patch_rings = patch_rings
+        self.tolerance = tolerance
+
+    # ------------------------------------------------------------------------------ build
+    def fit(self, model):
+        """Build the layered mesh under ``model``'s skin (a fitted
+        :class:`~autobones.expressions.model.ExpressionModel`) and factorise its system."""
+        if not 0.0 < float(self.dermal_fraction) < 1.0:
+            raise AutobonesError(f"tissue: dermal_fraction must lie in (0, 1), got {self.dermal_fraction}")
+        surf = model.surface_
+        first = surf.first
+        # skin facing out of the head (not skin that faces into it: the mouth's lining)
+        where = model.skin_ & ~model.mouth_["inward"]
+        if model.region_ is not None and self.regions is not None:
+            keep = [i for i, name in enumerate(model.region_labels_) if name in set(self.regions)]
+            where &= np.isin(model.region_, keep)
+        over_bone = np.zeros(len(surf.vertices), dtype=bool)
+        over_bone[surf.index[where]] = True
+        Fs = surf.skin_faces
+        # no element across the mouth line (with the lips among the regions: they part there)
+        upper = np.zeros(len(surf.vertices), dtype=np.int8)
+        zone = np.zeros(len(surf.vertices))
+        upper[surf.index] = model.mouth_["upper"] > 0.5
+        zone[surf.index] = model.mouth_["zone"]
+        across = (np.ptp(upper[Fs], axis=1) != 0) & (zone[Fs] >= 0.05).any(axis=1)
+        Fe = Fs[over_bone[Fs].all(axis=1) & ~across]
+        if len(Fe) == 0:
+            raise AutobonesError("tissue: no skin of the tissue's regions on this head (no triangle whose corners "
+                                 f"all lie in {', '.join(self.regions or ())} and face out of the head)")
+        cols, Fc = np.unique(Fe, return_inverse=True)
+        Fc = Fc.reshape(-1, 3)
+        nc = len(cols)
+        E0 = surf.vertices[cols]
+        Ns = model.skull_normals_[first[cols]]
+        T = np.maximum(model.thickness_[first[cols]], 1e-9)
+        # wind every element so that its normal points out of the head (away from the skull)
+        n_e = triangle_normals(E0, Fc)
+        flip = (n_e * Ns[Fc].sum(axis=1)).sum(axis=1) < 0
+        Fc[flip] = Fc[flip][:, [0, 2, 1]]
+        df = float(self.dermal_fraction)
+        X0 = np.concatenate([E0, E0 - Ns * (df * T)[:, None], E0 - Ns * T[:, None]])
+
+        # every column is solved for, the tissue's border too; the skin beyond it takes the
+        # tissue's correction fading out over ``blend`` face units, so no step opens there
+        self._extension(surf, cols, float(self.blend) * float(model.face_unit_))
+        self._skin_faces, self._skin_rest_normals = surf.skin_faces, surf.rest_normals
+        self._skin_adjacency = surf.adjacency
+
+        # per-area shares: each triangle's area split among its corners and its edges
+        area = 0.5 * np.linalg.norm(triangle_normals(E0, Fc), axis=1)
+        col_area = np.bincount(Fc.ravel(), weights=np.repeat(area / 3.0, 3), minlength=nc)
+        edges = mesh_edges(Fc)
+        ekey = edges[:, 0] * nc + edges[:, 1]
+        fe = np.sort(np.concatenate([Fc[:, [0, 1]], Fc[:, [1, 2]], Fc[:, [2, 0]]]), axis=1)
+        e_of = np.searchsorted(ekey, fe[:, 0] * nc + fe[:, 1])
+        edge_area = np.bincount(e_of, weights=np.tile(area / 3.0, 3), minlength=len(edges))
+
+        springs = []
+
+        def add(a, b, share, k, limit=np.inf, k2=0.0):
+            rest = np.linalg.norm(X0[a] - X0[b], axis=1)
+            ok = rest > 1e-12
+            a, b, rest, share = a[ok], b[ok], rest[ok], share[ok]
+            springs.append((a, b, rest, float(k) * share / rest**2, np.full(len(a), float(limit)),
+                            float(k2) * share / rest**2))
+
+        i, j = edges[:, 0], edges[:, 1]
+        cidx = np.arange(nc)
+        k1, k2 = (float(v) for v in self.dermal)
+        lim = 1.0 + float(self.biphasic)
+        # skin and fascia resist stretch but give under compression (they wrinkle instead):
+        # a tenth of the stiffness below the rest length
+        soft = float(self.compression)
+        add(i, j, edge_area, soft * self.epidermis, 1.0, (1.0 - soft) * self.epidermis)          # epidermis
+        add(nc + i, nc + j, edge_area, soft * self.fascia, 1.0, (1.0 - soft) * self.fascia)      # fascia
+        for top, bottom, k, ph2 in ((0, nc, k1, k2 - k1), (nc, 2 * nc, float(self.muscle_layer), 0.0)):
+            limit = lim if ph2 > 0 else np.inf
+            add(top + cidx, bottom + cidx, col_area, k, limit, ph2)                    # vertical
+            add(top + i, bottom + j, 0.5 * edge_area, k, limit, ph2)                   # crossed
+            add(top + j, bottom + i, 0.5 * edge_area, k, limit, ph2)
+        ring = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[i, j], np.r_[j, i])), shape=(nc, nc)) + sp.eye(nc)
+        self._patch = ring.tocsr()
+        for _ in range(int(self.patch_rings) - 1):
+            self._patch = (self._patch @ ring).tocsr()
+        self._patch.data[:] = 1.0
+        self._adjacency = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[i, j], np.r_[j, i])), shape=(nc, nc))
+        self.springs_ = _Springs(*(np.concatenate([s[m] for s in springs]) for m in range(6)))
+
+        # prisms: the dermal-fatty layer over the fascia, the muscle layer over the skull; each
+        # keeps its volume through the height of its columns (area x height)
+        self.prism_top_ = np.concatenate([Fc, nc + Fc])
+        self.prism_bottom_ = np.concatenate([nc + Fc, 2 * nc + Fc])
+        self.elements_ = Fc
+        across = self._across(Ns)
+        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer, across) for layer in range(3)])
+        self.layer_height_ = np.stack([df * T, (1.0 - df) * T])
+        self.column_weight_ = float(self.volume) * col_area / self.layer_height_**2    # (2, c)
+
+        self.columns_, self.elements_ = cols, Fc
+        self.rest_nodes_, self.thickness_ = X0, T
+        self.skull_normals_ = Ns
+        self.rest_volume_ = float(prism_volumes(X0, self.prism_top_, self.prism_bottom_).sum())
+        scale = col_area / (df * T) ** 2
+        self.drive_weight_ = float(self.drive) * scale
+        self.rest_weight_ = float(self.rest) * scale
+        self.contact_weight_ = float(self.contact) * scale
+        self._factorise()
+        return self
+
+    def _across(self, up):
+        """Unit mean column direction (e, 3) of each element's corners, from ``up`` (c, 3)."""
+        u = up[self.elements_].sum(axis=1)
+        return u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
+
+    @staticmethod
+    def _layer_areas(X, Fc, layer, across):
+        """Area (c,) around each column in node layer ``layer`` of ``X`` (3c, 3), measured across
+        the columns: a third of each element's area at that layer projected on the plane normal
+        to ``across`` (e, 3), the unit mean column direction at its corners (:meth:`_across`).
+        Area times height along the columns is then the volume however the layers tilt."""
+        nc = len(X) // 3
+        n = triangle_normals(X[layer * nc:(layer + 1) * nc], Fc)
+        a = 0.5 * np.abs(np.einsum("ij,ij->i", n, across))
+        return np.bincount(Fc.ravel(), weights=np.repeat(a / 3.0, 3), minlength=nc)
+
+    def _factorise(self):
+        """The global step's matrix over epidermis and fascia, factorised once, and the sparse
+        maps that gather each term's projections into its right-hand side."""
+        nc = len(self.columns_)
+        N = 3 * nc
+        s = self.springs_
+        # unknowns: epidermis then fascia nodes; the skull nodes are placed by the bones
+        free, fixed = np.arange(2 * nc), np.arange(2 * nc, N)
+        ns = len(s.a)
+        rows = np.concatenate([s.a, s.b])
+        cols = np.tile(np.arange(ns), 2)
+        # spring terms w |x_a - x_b - p|^2: incidence (N, s) weighted, +w at a and -w at b
+        self._spring_rhs = sp.csr_matrix((np.concatenate([s.weight, -s.weight]), (rows, cols)), shape=(N, ns))[free]
+        self._spring2_rhs = sp.csr_matrix((np.concatenate([s.weight2, -s.weight2]), (rows, cols)),
+                                          shape=(N, ns))[free]
+        w = s.weight + s.weight2
+        L = sp.csr_matrix((np.concatenate([w, w, -w, -w]),
+                           (np.concatenate([s.a, s.b, s.a, s.b]), np.concatenate([s.a, s.b, s.b, s.a]))), shape=(N, N))
+        # column terms w |(x_top - x_bottom) - p|^2, one per column and layer (dermal, muscle)
+        cw = self.column_weight_
+        c = np.arange(nc)
+        ctop, cbot = np.concatenate([c, nc + c]), np.concatenate([nc + c, 2 * nc + c])
+        k = np.arange(2 * nc)
+        self._column_rhs = sp.csr_matrix((np.concatenate([cw.ravel(), -cw.ravel()]),
+                                          (np.concatenate([ctop, cbot]), np.tile(k, 2))), shape=(N, 2 * nc))[free]
+        L = L + sp.csr_matrix((np.concatenate([cw.ravel(), cw.ravel(), -cw.ravel(), -cw.ravel()]),
+                               (np.concatenate([ctop, cbot, ctop, cbot]), np.concatenate([ctop, cbot, cbot, ctop]))),
+                              shape=(N, N))
+        diag = np.zeros(N)
+        diag[:nc] += self.rest_weight_ + self.contact_weight_
+        diag[nc:2 * nc] += self.drive_weight_ + self.contact_weight_
+        A = (L + sp.diags(diag)).tocsr()
+        self._coupling = A[free][:, fixed]
+        self._solve = factor_spd(A[free][:, free])
+
+    def _extension(self, surf, cols, reach):
+        """Where the tissue's correction reaches past its border: skin vertices (welded) within
+        ``reach`` (head sizes, along the skin's edges) of a column take the correction of their
+        nearest column, fading out smoothly (``_ext_vertices``, ``_ext_source``, ``_ext_weight``)."""
+        skin_w = surf.skin_welded
+        A = surf.adjacency.tocoo()
+        keep = skin_w[A.row] & skin_w[A.col]
+        r, c = A.row[keep], A.col[keep]
+        length = np.linalg.norm(surf.vertices[r] - surf.vertices[c], axis=1)
+        G = sp.csr_matrix((np.maximum(length, 1e-300), (r, c)), shape=A.shape)
+        dist, _, source = dijkstra(G, directed=False, indices=cols, min_only=True, return_predecessors=True,
+                                   limit=reach)
+        where = np.full(len(surf.vertices), -1, dtype=np.int64)
+        where[cols] = np.arange(len(cols))
+        out = np.flatnonzero(np.isfinite(dist) & (where < 0) & skin_w & (source >= 0))
+        self._ext_vertices = out
+        self._ext_source = where[source[out]]
+        self._ext_weight = 1.0 - smoothstep(dist[out] / max(reach, 1e-300))
+
+    def _keep_unfolded(self, S, P):
+        """Skin ``S`` (nw, 3, welded) where no skin triangle turns over that the wire result ``P``
+        (nw, 3) keeps the right way up: at the corners of such triangles the tissue's correction
+        ``S - P`` is halved (a quarter off on their neighbours), again until none is left; after
+        eight halvings it is dropped there (at worst the skin is ``P``). Returns the new skin and
+        how many vertices lost some of their correction."""
+        F, n0 = self._skin_faces, self._skin_rest_normals
+        upright = np.einsum("ij,ij->i", triangle_normals(P, F), n0) > 0
+        keep = np.ones(len(S))
+        D = S - P
+        out = S
+        for k in range(len(S)):
+            bad = upright & (np.einsum("ij,ij->i", triangle_normals(out, F), n0) <= 0)
+            if not bad.any():
+                break
+            hit = np.zeros(len(S), dtype=bool)
+            hit[F[bad].ravel()] = True
+            ring = (self._skin_adjacency @ hit.astype(np.float64) > 0) & ~hit
+            keep[ring] *= 0.75
+            keep[hit] *= 0.5
+            keep[hit & (keep < 0.5 ** 8)] = 0.0
+            out = P + keep[:, None] * D
+        return out, int((keep < 1.0).sum())
+
+    # ------------------------------------------------------------------------------ pose
+    def refine(self, posed, offset, rotation):
+        """The tissue's equilibrium under a wire-deformed pose.
+
+        Parameters
+        ----------
+        posed : (nw, 3) float
+            The wire deformer's posed skin (every welded vertex of ``model.surface_``), canonical,
+            head sizes.
+        offset, rotation : (nw, 3) float, (nw, 3, 3) float
+            The bones' motion at each welded vertex: a point ``v + u`` near rest vertex ``v`` goes
+            to ``v + offset + rotation @ u`` (jaw, lids, head and neck; not the muscles).
+
+        Returns
+        -------
+        skin : (nw, 3) float
+            The posed skin (every welded vertex; only skin near the tissue differs from
+            ``posed``), canonical, head sizes.
+        info : dict
+            ``iterations`` run, ``nodes`` (3c, 3) all layers' nodes, ``kept_wire`` (skin
+            vertices given back the wire result, fully or half, so that no triangle the wires
+            left the right way up turns over), ``volume`` (total tissue volume over rest,
+            1 = kept),
+            ``depth`` (the smallest height of an epidermal or fascia node above the skull, head
+            sizes; never below 0).
+        """
+        if not hasattr(self, "_solve"):
+            raise AutobonesError("TissueModel: call fit(model) before refine")
+        cols, nc = self.columns_, len(self.columns_)
+        T, Fc, s = self.thickness_, self.elements_, self.springs_
+        wire = np.asarray(posed, dtype=np.float64)
+        P = wire[cols]
+        R = np.asarray(rotation, dtype=np.float64)[cols]
+        # the columns turn with the bones but keep their depth: a blend of the jaw's turn and
+        # the head's (linear blend skinning) would shorten them
+        normal = np.einsum("nij,nj->ni", R, self.skull_normals_)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        skull = self.rest_nodes_[:nc] + np.asarray(offset, dtype=np.float64)[cols] - normal * T[:, None]
+        # where the wires carry each fascia node (never inside the skull)
+        drive = P - normal * (float(self.dermal_fraction) * T)[:, None]
+        drive -= np.minimum(np.einsum("ij,ij->i", drive - skull, normal), 0.0)[:, None] * normal
+        X = np.concatenate([P, drive, skull])
+        const = -(self._coupling @ skull)
+        const[:nc] += self.rest_weight_[:, None] * P
+        up2 = np.concatenate([normal, normal])                 # each free node's column direction
+        skull2 = np.concatenate([skull, skull])
+        contact = np.concatenate([self.contact_weight_, self.contact_weight_])[:, None]
+        drive_w = self.drive_weight_[:, None]
+        T2 = np.concatenate([T, T]) ** 2
+        # a column and its neighbours keep their volume together: without bending stiffness,
+        # one column per vertex would spike where its neighbour does not
+        patch = self._patch
+        mid_rest = patch @ (0.5 * (self.layer_rest_area_[:2] + self.layer_rest_area_[1:])).T
+        across = self._across(normal)
+        area_skull = self._layer_areas(X, Fc, 2, across)
+        up_s = np.where((s.a // nc != s.b // nc)[:, None], normal[s.a % nc], 0.0)   # springs between layers
+        S = sp.hstack([self._spring_rhs, self._spring2_rhs, self._column_rhs]).tocsr()
+
+        def step(x):
+            """One local/global iteration from epidermis and fascia ``x`` (2c, 3): every term's
+            projection, then the global solve."""
+            X[:2 * nc] = x
+            d = X[s.a] - X[s.b]
+            length = np.sqrt(np.einsum("ij,ij->i", d, d))
+            u = d / np.maximum(length, 1e-300)[:, None]
+            # a spring between layers points out of the head: one pressed through itself is
+            # pushed back out, not held inverted (the paper's compression penalty)
+            u -= 2.0 * np.minimum(np.einsum("ij,ij->i", u, up_s), 0.0)[:, None] * up_s
+            p1 = s.rest[:, None] * u
+            p2 = np.minimum(length, s.limit * s.rest)[:, None] * u
+            # each layer's column keeps area x height: squeezed sideways, it grows taller
+            a0, a1 = self._layer_areas(X, Fc, 0, across), self._layer_areas(X, Fc, 1, across)
+            mid_now = patch @ np.stack([0.5 * (a0 + a1), 0.5 * (a1 + area_skull)]).T
+            ratio = np.clip(mid_rest / np.maximum(mid_now, 1e-300), 0.1, 10.0).T
+            v = np.concatenate([X[:nc] - X[nc:2 * nc], X[nc:2 * nc] - X[2 * nc:]])
+            pc = v + ((self.layer_height_ * ratio).ravel() - np.einsum("ij,ij->i", v, up2))[:, None] * up2
+            # the skull's outside; the fascia's place along the skull (its height is the tissue's)
+            out = x - np.minimum(np.einsum("ij,ij->i", x - skull2, up2), 0.0)[:, None] * up2
+            along = drive + np.einsum("ij,ij->i", x[nc:] - drive, normal)[:, None] * normal
+            rhs = const + S @ np.concatenate([p1, p2, pc]) + contact * out
+            rhs[nc:] += drive_w * along
+            return self._solve(rhs)
+
+        # Anderson acceleration of the fixed-point iteration (Peng, Deng, Zhang & Zhang 2018): the
+        # next point mixes the last few steps; a step whose residual grows restarts the history
+        x = X[:2 * nc].copy()
+        hist_g, hist_f, prev = [], [], None
+        best, it = np.inf, 0
+        for it in range(1, int(self.iterations) + 1):
+            g = step(x)
+            f = g - x
+            if np.sqrt(np.mean(np.einsum("ij,ij->i", f, f) / T2)) <= float(self.tolerance):
+                x = g
+                break
+            res = float(np.sqrt(np.einsum("ij,ij->", f, f)))
+            if res > best:
+                hist_g, hist_f, prev = [], [], None
+            best = min(best, res)
+            if prev is not None and int(self.acceleration) > 0:
+                hist_g.append((g - prev[0]).ravel())
+                hist_f.append((f - prev[1]).ravel())
+                if len(hist_g) > int(self.acceleration):
+                    del hist_g[0], hist_f[0]
+            prev = (g, f)
+            if hist_f:
+                gamma = np.linalg.lstsq(np.stack(hist_f, axis=1), f.ravel(), rcond=None)[0]
+                x = g - (np.stack(hist_g, axis=1) @ gamma).reshape(g.shape)
+            else:
+                x = g
+        # skull non-penetration, exactly: what is still inside goes out along the skull normal
+        x = x - np.minimum(np.einsum("ij,ij->i", x - skull2, up2), 0.0)[:, None] * up2
+        X[:2 * nc] = x
+        # the skin: the columns' epidermis, the correction carried past the border, then nothing
+        # turned over that the wires left upright
+        skin = wire.copy()
+        skin[cols] = X[:nc]
+        skin[self._ext_vertices] += self._ext_weight[:, None] * (X[:nc] - P)[self._ext_source]
+        skin, kept = self._keep_unfolded(skin, wire)
+        X[:nc] = skin[cols]
+        depth = np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2)
+        info = {"iterations": it, "nodes": X, "kept_wire": kept,
+                "volume": float(prism_volumes(X, self.prism_top_, self.prism_bottom_).sum() / self.rest_volume_),
+                "depth": float(depth.min())}
+        return skin, info
