@@ -227,7 +227,7 @@ class Rig:
         return cached
 
     def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
-             head_deg=None, neck_deg=None, arkit=None):
+             head_deg=None, neck_deg=None, arkit=None, tissue=False):
         """Posed vertices (n, 3), input frame and units: FACS action units (``au={12: 0.8}``,
         ``"12L"`` for one side), an emotion (``expression="happiness"``), muscle contractions,
         jaw opening in degrees, eyelids, eye gaze and head/neck rotations; see
@@ -237,7 +237,11 @@ class Rig:
         displacements add on top of everything else, unrotated: alone they give exactly what a
         glTF player gives (rest + sum of weight x target); mixed with AUs, the jaw or head/eye
         turns, both act and nothing wins (an AU jaw opening plus ``jawOpen`` opens twice; glTF
-        players would also turn the targets with the bones)."""
+        players would also turn the targets with the bones).
+
+        ``tissue=True``: the skin refined by the layered soft tissue's equilibrium (Lee,
+        Terzopoulos & Waters 1995; :mod:`autobones.expressions.tissue`): skin over shortening
+        muscles bulges, the tissue keeps its volume and stays off the skull."""
         offset = self.arkit_offset(arkit)
         only_arkit = (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
                       and gaze is None and look_at is None and head_deg is None and neck_deg is None)
@@ -246,7 +250,7 @@ class Rig:
         else:
             base = self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
                                                 eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
-                                                neck_deg=neck_deg)
+                                                neck_deg=neck_deg, tissue=tissue)
         return base if offset is None else base + offset
 
     def arkit_offset(self, weights):
@@ -274,11 +278,12 @@ class Rig:
             out += w * np.asarray(targets[name], dtype=np.float64)
         return out
 
-    def expression_record(self, targets=(), skipped=()):
+    def expression_record(self, targets=(), skipped=(), tissue=False):
         """The sidecar's ``expressions`` entry (rigs with muscles; None otherwise): the definitions
         the model poses with (``format``, their ``sha256``, the whole ``definitions``) and the morph
         targets written to the glb (``name``, ``au``, the AU's ``label``, ``max_displacement`` in
-        mesh units) and those ``skipped`` as all zero on this head."""
+        mesh units), those ``skipped`` as all zero on this head, and whether the targets carry the
+        ``tissue`` pass."""
         if not self.muscles:
             return None
         from .expressions.model import load_expressions
@@ -292,9 +297,9 @@ class Rig:
                 "morph_targets": [{"name": name, "au": name[2:], "label": aus.get(name[2:].rstrip("LR"), {}).get("name"),
                                    "max_displacement": float(np.linalg.norm(d, axis=1).max())}
                                   for name, d in targets],
-                "morph_targets_skipped": list(skipped), "definitions": doc}
+                "morph_targets_skipped": list(skipped), "morph_targets_tissue": bool(tissue), "definitions": doc}
 
-    def save(self, path, expressions=False):
+    def save(self, path, expressions=False, tissue=False):
         """Write ``path`` (.glb), its ``.rig.json`` sidecar and ``.weights.npz``.
 
         All three are written to temporary files in the target folder first and
@@ -310,7 +315,8 @@ class Rig:
             displacement at intensity 1 from the neutral mesh, computed on this head by
             :meth:`expression_model`; see :mod:`autobones.expressions.morph_targets`). True: one per AU of
             the definitions, both sides; ``"sides"``: also ``AU12L``/``AU12R``; a list: those.
-            Needs the muscles of ``transfer``. Rigs with muscles always record the
+            Needs the muscles of ``transfer``. ``tissue=True`` refines each target by the
+            layered tissue (:meth:`pose` with ``tissue=True``). Rigs with muscles always record the
             expression definitions in the sidecar (``expressions``), so a loaded rig
             poses any mix the same way.
         """
@@ -325,8 +331,10 @@ class Rig:
         if expressions is not False and expressions is not None:
             from .expressions.morph_targets import au_morph_targets
 
-            morphs, skipped = au_morph_targets(self.expression_model(), expressions)
-        record = self.expression_record(morphs, skipped)
+            morphs, skipped = au_morph_targets(self.expression_model(), expressions, tissue=tissue)
+        elif tissue:
+            raise AutobonesError("tissue=True refines the AU morph targets: it needs expressions=True")
+        record = self.expression_record(morphs, skipped, tissue=tissue)
         if self.arkit_targets:  # after the AUs: named as ARKit does (mesh.extras.targetNames)
             morphs = list(morphs) + list(self.arkit_targets.items())
         side = self.sidecar()

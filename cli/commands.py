@@ -53,11 +53,16 @@ def cmd_transfer(args):
     import autobones
 
     out = args.output or _default_out(args.head)
+    if args.tissue and not (args.expressions or args.expression_sides):
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError("--tissue refines the AU morph targets: add --expressions (or pose with "
+                             "autobones pose RIG.glb --tissue)")
     _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
     rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
                              arkit=args.arkit, symmetric=args.symmetric)
-    written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions)
+    written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions, tissue=args.tissue)
     if rig.options.get("landmarks_source") == "detected":
         conf = rig.landmark_confidence or {}
         dropped = rig.landmarks_dropped or []
@@ -120,13 +125,13 @@ def cmd_pose(args):
         rig.expression_model(args.definitions)  # pose uses the model built last
     V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
                  eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
-                 arkit=arkit or None)
+                 arkit=arkit or None, tissue=args.tissue)
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
                      + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
                      + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
                      + ([f"gaze {args.gaze}"] if gaze else []) + ([f"look at {args.look_at}"] if look_at else [])
                      + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else [])
-                     + [f"{k} {v:g}" for k, v in arkit.items()])
+                     + [f"{k} {v:g}" for k, v in arkit.items()] + (["tissue"] if args.tissue else []))
     write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
     moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0
     print(f"{out}: {what or 'neutral'}; {len(V)} vertices, largest displacement {moved:.4g} "
@@ -198,7 +203,7 @@ def cmd_batch(args):
 
     options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
                            expressions="sides" if args.expression_sides else args.expressions, arkit=args.arkit,
-                           symmetric=args.symmetric)
+                           symmetric=args.symmetric, tissue=args.tissue)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
 

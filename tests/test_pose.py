@@ -435,3 +435,20 @@ def test_cli_pose_with_other_definitions(saved, tmp_path, capsys):
     code, out, err = _cli(["pose", "head.glb", "--definitions", "broken.json", "-o", "b.obj"], tmp_path, capsys)
     assert code == 2 and len(err.strip().splitlines()) == 1 and "broken.json" in err
     assert not (tmp_path / "b.obj").exists()
+
+
+def test_cli_pose_with_the_tissue_pass(saved, tmp_path, capsys):
+    rig, glb = saved("default")
+    _copy_rig(glb, tmp_path, "head")
+    code, out, err = _cli(["pose", "head.glb", "--au", "12", "--tissue", "-o", "t.obj"], tmp_path, capsys)
+    assert code == 0 and "tissue" in out, err
+    V, _ = autobones.load_mesh(tmp_path / "t.obj")
+    expected = rig.pose(au={12: 1}, tissue=True)
+    assert np.abs(V - expected).max() < 1e-6 * rig.frame.size
+    assert np.abs(V - rig.pose(au={12: 1})).max() > 1e-3 * rig.frame.size   # the tissue did move the skin
+    # transfer refuses --tissue without the morph targets it refines, before writing anything
+    code, out, err = _cli(["transfer", str(ROOT / "generic_rig" / "default_head.obj"), "--landmarks",
+                           str(ROOT / "generic_rig" / "default_head.landmarks.json"), "--tissue", "-o", "x.glb"],
+                          tmp_path, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--expressions" in err
+    assert not (tmp_path / "x.glb").exists()

@@ -22,7 +22,7 @@ LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
 # options and naming
 
 def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False, arkit=False,
-                 symmetric="auto"):
+                 symmetric="auto", tissue=False):
     """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
 
     ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
@@ -30,15 +30,21 @@ def make_options(transfer=False, density="medium", rig=None, random_state=0, exp
     ``"sides"``) adds AU morph targets to each glb (``Rig.save``); the key is present only
     when set, so other batches keep their options hash. ``arkit`` (transfer only) adds the 52
     ARKit shapes (``transfer(..., arkit=True)``), the same way, and so does ``symmetric`` (transfer
-    only) when not ``"auto"`` (``transfer(..., symmetric=...)``).
+    only) when not ``"auto"`` (``transfer(..., symmetric=...)``). ``tissue`` (with ``expressions``)
+    refines the morph targets by the layered tissue (``Rig.save(..., tissue=True)``), present only
+    when set.
     """
     from ..placement.facial_bones import DENSITIES, bone_count
 
+    if transfer and tissue and not expressions:
+        raise AutobonesError("--tissue refines the AU morph targets: add --expressions")
     if transfer:
         return {"mode": "transfer", "density": None,
                 "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
                 **({"expressions": expressions} if expressions else {}), **({"arkit": True} if arkit else {}),
-                **({"symmetric": symmetric} if symmetric != "auto" else {})}
+                **({"symmetric": symmetric} if symmetric != "auto" else {}), **({"tissue": True} if tissue else {})}
+    if tissue:
+        raise AutobonesError("--tissue refines the AU morph targets of a transfer: add --transfer --expressions")
     if symmetric != "auto":
         raise AutobonesError("--symmetric chooses how a transfer's correspondence is fitted, which place does not "
                              "use; add --transfer")
@@ -132,7 +138,7 @@ def rig_one(input_path, output_path, options):
         with _one_blas_thread():
             rig = _make_rig(input_path, options, record)
         rig.batch = {"options": options, "options_hash": h}
-        _save_atomically(rig, output_path, partial, options.get("expressions", False))
+        _save_atomically(rig, output_path, partial, options.get("expressions", False), options.get("tissue", False))
         record.update(status="ok", timings={k: round(float(v), 4) for k, v in rig.timings.items()},
                       vertices=int(len(rig.vertices)), bones=int(len(rig.skeleton)))
     except AutobonesError as exc:
@@ -178,7 +184,7 @@ class _one_blas_thread:
         return False
 
 
-def _save_atomically(rig, output_path, partial, expressions=False):
+def _save_atomically(rig, output_path, partial, expressions=False, tissue=False):
     """Save into ``partial``, then rename glb, npz and last the sidecar (the commit mark) into place."""
     folder = os.path.dirname(os.path.abspath(output_path))
     try:
@@ -188,7 +194,7 @@ def _save_atomically(rig, output_path, partial, expressions=False):
         os.mkdir(partial)
     except OSError as exc:
         raise AutobonesError(f"{output_path}: cannot create the output folder ({exc.strerror or exc})") from exc
-    staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions)
+    staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions, tissue=tissue)
     glb, js, npz = output_paths(output_path)
     # all three or none (a failed rename puts back what was there), the sidecar last: it marks the file done
     replace_all(((staged[0], glb), (staged[2], npz), (staged[1], js)), "the rig")

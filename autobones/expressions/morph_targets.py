@@ -53,7 +53,7 @@ def target_keys(action_units, which=True):
     return out
 
 
-def au_morph_targets(model, which=True):
+def au_morph_targets(model, which=True, tissue=False):
     """Displacement of every chosen AU at intensity 1 from the neutral mesh.
 
     Parameters
@@ -62,6 +62,8 @@ def au_morph_targets(model, which=True):
         A fitted model (``rig.expression_model()``).
     which : True, "sides" or sequence of str
         See :func:`target_keys`.
+    tissue : bool
+        Each target posed with the layered tissue pass (:meth:`ExpressionModel.pose`).
 
     Returns
     -------
@@ -75,7 +77,7 @@ def au_morph_targets(model, which=True):
     neutral = np.asarray(model.vertices_, dtype=np.float64)
     targets, skipped = [], []
     for key in target_keys(model.action_units, which):
-        delta = model.pose(au={key: 1.0}) - neutral
+        delta = model.pose(au={key: 1.0}, tissue=tissue) - neutral
         name = "AU" + key
         if not np.isfinite(delta).all():
             raise AutobonesError(f"morph target {name}: the pose is not finite on this head")
