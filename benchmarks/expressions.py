@@ -41,7 +41,8 @@ at a remeshed vertex is the ICT displacement interpolated at its closest point o
 in the part it came from. Beside it, the copy through the correspondence (``copy_through``).
 Stage 1's grid solves are shared between the shapes (``SharedSolves``: ``linear_pose`` and its QR
 do not depend on the target), which gives ``_solve_linear``'s answers (checked at the start).
-There is no "with tissue pass" number yet (issue #16 item 1 is not built): the column prints "-".
+The "tissue" columns pose the same fitted parameters with the layered tissue pass (issue #16 item 1,
+``pose_parameters(..., tissue=True)``); the fit does not search through the tissue.
 
 Data: ICT-FaceKit (``../shared/data/ict``), a linear model whose neutral head
 ``generic_neutral_mesh.obj`` and four real expression shapes (``jawOpen``,
@@ -640,12 +641,16 @@ def ict57_benchmark(source="identity002", targets=("identity000", "identity001")
             sel = masks_s[where]
             c, jaw, lids, info = fit_rig(m_s, Xs, sel, refine=refine, solve=shared.solver(n, where))
             r["fit", where] = explained(m_s.pose_parameters(c, jaw, lids), Xs, Vs, sel)
-            tr, cp = [], []
+            # the same parameters with the tissue pass (issue #16 item 1): not refitted through it
+            r["fit+tissue", where] = explained(m_s.pose_parameters(c, jaw, lids, tissue=True), Xs, Vs, sel)
+            tr, cp, tt = [], [], []
             for name, (Vt, m_t, P_t, masks_t, tri, tb) in heads.items():
                 tr.append(explained(m_t.pose_parameters(c, jaw, lids), truth[name], Vt, masks_t[where]))
+                tt.append(explained(m_t.pose_parameters(c, jaw, lids, tissue=True), truth[name], Vt, masks_t[where]))
                 cp.append(explained(copies[name], truth[name], Vt, masks_t[where]))
                 r["transfer", where, name] = tr[-1]
             r["transfer", where], r["copy", where] = float(np.mean(tr)), float(np.mean(cp))
+            r["transfer+tissue", where] = float(np.mean(tt))
             if where == "skin":
                 r["params"] = (jaw, lids, info)
         res[n] = r
@@ -659,24 +664,27 @@ def ict57_benchmark(source="identity002", targets=("identity000", "identity001")
 
     cols = [("fit skin", ("fit", "skin")), ("fit all", ("fit", "all")), ("transfer skin", ("transfer", "skin")),
             ("transfer all", ("transfer", "all")), ("copy-through skin", ("copy", "skin")),
-            ("copy-through all", ("copy", "all"))]
-    lines = ["| shape | AU | " + " | ".join(c for c, _ in cols) + " | with tissue pass |",
-             "|---|---|" + "---|" * (len(cols) + 1)]
+            ("copy-through all", ("copy", "all")), ("fit skin, tissue", ("fit+tissue", "skin")),
+            ("fit all, tissue", ("fit+tissue", "all")), ("transfer skin, tissue", ("transfer+tissue", "skin")),
+            ("transfer all, tissue", ("transfer+tissue", "all"))]
+    lines = ["| shape | AU | " + " | ".join(c for c, _ in cols) + " |",
+             "|---|---|" + "---|" * len(cols)]
     for n, r in res.items():
-        lines.append(f"| {n} | {r['au']} | " + " | ".join(fmt(r[k]) for _, k in cols) + " | - |")
+        lines.append(f"| {n} | {r['au']} | " + " | ".join(fmt(r[k]) for _, k in cols) + " |")
     M = {c: np.array([r[k] for r in res.values()]) for c, k in cols}
-    lines.append(f"| **mean of {len(res)}** | | " + " | ".join(fmt(np.nanmean(M[c])) for c, _ in cols) + " | - |")
+    lines.append(f"| **mean of {len(res)}** | | " + " | ".join(fmt(np.nanmean(M[c])) for c, _ in cols) + " |")
     names = list(res)
     lines.append("| **worst** | | " + " | ".join(f"{fmt(np.nanmin(M[c]))} ({names[int(np.nanargmin(M[c]))]})"
-                                                  for c, _ in cols) + " | - |")
+                                                  for c, _ in cols) + " |")
     print(f"\nICT's shapes mapped to action units (generic_rig/expressions.json au_arkit), explained %: fit on "
           f"{source} (ICT's triangulation), transfer = {source}'s parameters on "
           + " and ".join(f"{h} remeshed" for h in heads) + " (mean of the two), copy-through = the displacement "
           "copied through the transfer's dense correspondence (mean of the two)\n")
     print("\n".join(lines))
     print("\nnotes: 'skin' columns are fitted and scored on the skin (largest part), 'all' columns on every "
-          "vertex (eyeballs, teeth, lashes, shells too). 'with tissue pass' is '-': the tissue pass (issue #16 "
-          "item 1) is not built yet, so there are no numbers with it. Per remeshed identity, transfer skin: "
+          "vertex (eyeballs, teeth, lashes, shells too). 'tissue' columns pose the same parameters with the "
+          "layered tissue pass (issue #16 item 1; pose(tissue=True)), not refitted through it. Per remeshed "
+          "identity, transfer skin: "
           + "; ".join(f"{h} mean {fmt(np.mean([r['transfer', 'skin', h] for r in res.values()]))}" for h in heads))
     fs, ts = M["fit skin"], M["transfer skin"]
     four = [n for n in FOUR if n in res]

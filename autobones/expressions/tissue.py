@@ -34,9 +34,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from ..errors import AutobonesError
-from ..geometry.laplacian import factor_spd
+from ..geometry.laplacian import factor_spd, laplacian
 from ..geometry.normals import cross_rows, triangle_normals
-from ..geometry.smooth import smoothstep
 from ..geometry.topology import mesh_edges
 
 
@@ -147,8 +146,8 @@ class TissueModel:
 
     def __init__(self, dermal_fraction=0.4, epidermis=60.0, fascia=60.0, muscle_layer=10.0, dermal=(30.0, 70.0),
                  biphasic=0.1, volume=3000.0, drive=100.0, rest=0.5, contact=1000.0,
-                 regions=("forehead", "brow", "nose", "cheeks", "chin", "jaw"), iterations=40, tolerance=1e-3,
-                 acceleration=5, compression=0.1, blend=0.15, patch_rings=1):
+                 regions=("forehead", "brow", "nose", "cheeks", "chin", "jaw"), iterations=40, tolerance=2e-3,
+                 acceleration=5, compression=0.1, blend=0.15, spread=2.0, reach=1.0):
         self.dermal_fraction = dermal_fraction
         self.epidermis = epidermis
         self.fascia = fascia
@@ -164,7 +163,8 @@ class TissueModel:
         self.acceleration = acceleration
         self.compression = compression
         self.blend = blend
-        self.patch_rings = patch_rings
+        self.spread = spread
+        self.reach = reach
         self.tolerance = tolerance
 
     # ------------------------------------------------------------------------------ build
@@ -244,11 +244,13 @@ class TissueModel:
             add(top + cidx, bottom + cidx, col_area, k, limit, ph2)                    # vertical
             add(top + i, bottom + j, 0.5 * edge_area, k, limit, ph2)                   # crossed
             add(top + j, bottom + i, 0.5 * edge_area, k, limit, ph2)
-        ring = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[i, j], np.r_[j, i])), shape=(nc, nc)) + sp.eye(nc)
-        self._patch = ring.tocsr()
-        for _ in range(int(self.patch_rings) - 1):
-            self._patch = (self._patch @ ring).tocsr()
-        self._patch.data[:] = 1.0
+        # skin resists bending: a squeezed patch bulges over a few tissue thicknesses, not column
+        # by column; the height a squeeze asks for is spread by heat diffusion over ``spread``
+        # median thicknesses (one implicit step, factorised once)
+        Lc, Mc = laplacian(E0, Fc)
+        t = (float(self.spread) * float(np.median(T))) ** 2
+        self._spread_mass = Mc.tocsr()
+        self._spread_solve = factor_spd((Mc + t * Lc).tocsc())
         self._adjacency = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[i, j], np.r_[j, i])), shape=(nc, nc))
         self.springs_ = _Springs(*(np.concatenate([s[m] for s in springs]) for m in range(6)))
 
@@ -258,7 +260,7 @@ class TissueModel:
         self.prism_bottom_ = np.concatenate([nc + Fc, 2 * nc + Fc])
         self.elements_ = Fc
         across = self._across(Ns)
-        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer, across) for layer in range(3)])
+        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer, None) for layer in range(3)])
         self.layer_height_ = np.stack([df * T, (1.0 - df) * T])
         self.column_weight_ = float(self.volume) * col_area / self.layer_height_**2    # (2, c)
 
@@ -286,7 +288,7 @@ class TissueModel:
         Area times height along the columns is then the volume however the layers tilt."""
         nc = len(X) // 3
         n = triangle_normals(X[layer * nc:(layer + 1) * nc], Fc)
-        a = 0.5 * np.abs(np.einsum("ij,ij->i", n, across))
+        a = 0.5 * np.linalg.norm(n, axis=1) if across is None else 0.5 * np.abs(np.einsum("ij,ij->i", n, across))
         return np.bincount(Fc.ravel(), weights=np.repeat(a / 3.0, 3), minlength=nc)
 
     def _factorise(self):
@@ -325,37 +327,50 @@ class TissueModel:
         self._solve = factor_spd(A[free][:, free])
 
     def _extension(self, surf, cols, reach):
-        """Where the tissue's correction reaches past its border: skin vertices (welded) within
-        ``reach`` (head sizes, along the skin's edges) of a column take the correction of their
-        nearest column, fading out smoothly (``_ext_vertices``, ``_ext_source``, ``_ext_weight``)."""
+        """How the tissue's correction reaches past its border: skin vertices (welded) within
+        ``reach`` (head sizes, along the skin's edges) of a column take the harmonic extension of
+        the columns' correction (Laplace's equation on that band, the correction on the columns,
+        zero beyond the band), which fades smoothly to nothing. Sets ``_ext_vertices`` and the
+        factorised band system :meth:`_extend` solves."""
         skin_w = surf.skin_welded
         A = surf.adjacency.tocoo()
         keep = skin_w[A.row] & skin_w[A.col]
         r, c = A.row[keep], A.col[keep]
         length = np.linalg.norm(surf.vertices[r] - surf.vertices[c], axis=1)
         G = sp.csr_matrix((np.maximum(length, 1e-300), (r, c)), shape=A.shape)
-        dist, _, source = dijkstra(G, directed=False, indices=cols, min_only=True, return_predecessors=True,
-                                   limit=reach)
-        where = np.full(len(surf.vertices), -1, dtype=np.int64)
-        where[cols] = np.arange(len(cols))
-        out = np.flatnonzero(np.isfinite(dist) & (where < 0) & skin_w & (source >= 0))
-        self._ext_vertices = out
-        self._ext_source = where[source[out]]
-        self._ext_weight = 1.0 - smoothstep(dist[out] / max(reach, 1e-300))
+        dist = dijkstra(G, directed=False, indices=cols, min_only=True, limit=reach)
+        in_cols = np.zeros(len(surf.vertices), dtype=bool)
+        in_cols[cols] = True
+        band = np.flatnonzero(np.isfinite(dist) & ~in_cols & skin_w)
+        self._ext_vertices = band
+        if len(band) == 0:
+            self._ext_solve = None
+            return
+        # the welded mesh's Laplacian (positive semi-definite), restricted to the band: Dirichlet
+        # on the columns (the correction) and beyond the band (zero)
+        Lp = surf.laplacian.tocsr()
+        self._ext_coupling = Lp[band][:, cols]
+        self._ext_solve = factor_spd(Lp[band][:, band] + sp.eye(len(band)) * 1e-12 * abs(Lp.diagonal()).max())
+
+    def _extend(self, delta):
+        """The correction (b, 3) on the band (``_ext_vertices``) from the columns' ``delta`` (c, 3)."""
+        if self._ext_solve is None:
+            return np.zeros((0, 3))
+        return self._ext_solve(-(self._ext_coupling @ delta))
 
     def _keep_unfolded(self, S, P):
         """Skin ``S`` (nw, 3, welded) where no skin triangle turns over that the wire result ``P``
         (nw, 3) keeps the right way up: at the corners of such triangles the tissue's correction
         ``S - P`` is halved (a quarter off on their neighbours), again until none is left; after
         eight halvings it is dropped there (at worst the skin is ``P``). Returns the new skin and
-        how many vertices lost some of their correction."""
-        F, n0 = self._skin_faces, self._skin_rest_normals
-        upright = np.einsum("ij,ij->i", triangle_normals(P, F), n0) > 0
+        the fraction (nw,) of its correction each vertex kept."""
+        F = self._skin_faces
+        upright = self._upright(P)
         keep = np.ones(len(S))
         D = S - P
         out = S
         for k in range(len(S)):
-            bad = upright & (np.einsum("ij,ij->i", triangle_normals(out, F), n0) <= 0)
+            bad = upright & ~self._upright(out)
             if not bad.any():
                 break
             hit = np.zeros(len(S), dtype=bool)
@@ -365,7 +380,30 @@ class TissueModel:
             keep[hit] *= 0.5
             keep[hit & (keep < 0.5 ** 8)] = 0.0
             out = P + keep[:, None] * D
-        return out, int((keep < 1.0).sum())
+        return out, keep
+
+    def _pressure(self, X, weight, normal, across, passes=2):
+        """Raise the epidermis of ``X`` (3c, 3, changed in place) along ``normal`` (c, 3) until the
+        tissue's total volume is back to rest, each column by its share of ``weight`` (c,) times
+        its area (``across``: see :meth:`_layer_areas`). Returns the rise per column (c,)."""
+        nc = len(self.columns_)
+        rise = np.zeros(nc)
+        area = self._layer_areas(X, self.elements_, 0, across)
+        denom = float((weight * area).sum())
+        if denom <= 0.0:
+            return rise
+        floor = 0.1 * self.layer_height_[0]          # a dermal layer is never pressed thinner than this
+        for _ in range(passes):   # the volume is linear in the rise up to the prisms' tilt and the floor
+            lost = self.rest_volume_ - float(prism_volumes(X, self.prism_top_, self.prism_bottom_).sum())
+            height = np.einsum("ij,ij->i", X[:nc] - X[nc:2 * nc], normal)
+            step = np.maximum(lost * weight / denom, np.minimum(floor - height, 0.0))
+            X[:nc] += step[:, None] * normal
+            rise += step
+        return rise
+
+    def _upright(self, S):
+        """(m,) bool: the skin triangles of welded skin ``S`` (nw, 3) facing the way they do at rest."""
+        return np.einsum("ij,ij->i", triangle_normals(S, self._skin_faces), self._skin_rest_normals) > 0
 
     # ------------------------------------------------------------------------------ pose
     def refine(self, posed, offset, rotation):
@@ -416,12 +454,8 @@ class TissueModel:
         contact = np.concatenate([self.contact_weight_, self.contact_weight_])[:, None]
         drive_w = self.drive_weight_[:, None]
         T2 = np.concatenate([T, T]) ** 2
-        # a column and its neighbours keep their volume together: without bending stiffness,
-        # one column per vertex would spike where its neighbour does not
-        patch = self._patch
-        mid_rest = patch @ (0.5 * (self.layer_rest_area_[:2] + self.layer_rest_area_[1:])).T
+        area_rest = self.layer_rest_area_[:2]
         across = self._across(normal)
-        area_skull = self._layer_areas(X, Fc, 2, across)
         up_s = np.where((s.a // nc != s.b // nc)[:, None], normal[s.a % nc], 0.0)   # springs between layers
         S = sp.hstack([self._spring_rhs, self._spring2_rhs, self._column_rhs]).tocsr()
 
@@ -438,9 +472,9 @@ class TissueModel:
             p1 = s.rest[:, None] * u
             p2 = np.minimum(length, s.limit * s.rest)[:, None] * u
             # each layer's column keeps area x height: squeezed sideways, it grows taller
-            a0, a1 = self._layer_areas(X, Fc, 0, across), self._layer_areas(X, Fc, 1, across)
-            mid_now = patch @ np.stack([0.5 * (a0 + a1), 0.5 * (a1 + area_skull)]).T
-            ratio = np.clip(mid_rest / np.maximum(mid_now, 1e-300), 0.1, 10.0).T
+            a0, a1 = self._layer_areas(X, Fc, 0, None), self._layer_areas(X, Fc, 1, None)
+            squeeze = np.log(np.clip(area_rest / np.maximum(np.stack([a0, a1]), 1e-300), 0.5, 2.0))
+            ratio = np.exp(self._spread_solve(self._spread_mass @ squeeze.T).T)
             v = np.concatenate([X[:nc] - X[nc:2 * nc], X[nc:2 * nc] - X[2 * nc:]])
             pc = v + ((self.layer_height_ * ratio).ravel() - np.einsum("ij,ij->i", v, up2))[:, None] * up2
             # the skull's outside; the fascia's place along the skull (its height is the tissue's)
@@ -476,16 +510,41 @@ class TissueModel:
                 x = g - (np.stack(hist_g, axis=1) @ gamma).reshape(g.shape)
             else:
                 x = g
-        # skull non-penetration, exactly: what is still inside goes out along the skull normal
-        x = x - np.minimum(np.einsum("ij,ij->i", x - skull2, up2), 0.0)[:, None] * up2
         X[:2 * nc] = x
+        # no column is pushed or pulled further than its own thickness from where the wires put
+        # it: a fold the wires squeeze in (a jaw turned against the neck) bulges, but no more
+        if self.reach is not None:
+            corr = X[:2 * nc] - np.concatenate([P, drive])
+            size = np.linalg.norm(corr, axis=1)
+            limit = float(self.reach) * np.concatenate([T, T])
+            X[:2 * nc] -= corr * (1.0 - np.minimum(1.0, limit / np.maximum(size, 1e-300)))[:, None]
+        # the tissue as a whole is incompressible: the volume the columns' own terms leave (their
+        # stiffness against the drive, a fold held back) is taken up as a pressure on the skin the
+        # pose moves, each column's epidermis rising along its normal in proportion to its motion
+        motion = (np.linalg.norm(P - self.rest_nodes_[:nc] - np.asarray(offset, dtype=np.float64)[cols], axis=1)
+                  + np.linalg.norm(X[:nc] - P, axis=1))
+        rise = self._pressure(X, motion, normal, across)
         # the skin: the columns' epidermis, the correction carried past the border, then nothing
         # turned over that the wires left upright
         skin = wire.copy()
         skin[cols] = X[:nc]
-        skin[self._ext_vertices] += self._ext_weight[:, None] * (X[:nc] - P)[self._ext_source]
-        skin, kept = self._keep_unfolded(skin, wire)
+        skin[self._ext_vertices] += self._extend(X[:nc] - P)
+        skin, keep = self._keep_unfolded(skin, wire)
         X[:nc] = skin[cols]
+        # what a held-back fold cost is restored on the skin it did not touch (undone if that folds)
+        whole = keep[cols] == 1.0
+        rise = self._pressure(X, motion * whole, normal, across)
+        if np.any(rise):
+            more = skin.copy()
+            more[cols] = X[:nc]
+            more[self._ext_vertices] += self._extend((rise * whole)[:, None] * normal)
+            if np.all(self._upright(more) | ~self._upright(wire)):
+                skin = more
+        # skull non-penetration, exactly, last: what is still inside goes out along the skull normal
+        X[:nc] = skin[cols]
+        X[:2 * nc] -= np.minimum(np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2), 0.0)[:, None] * up2
+        skin[cols] = X[:nc]
+        kept = int((keep < 1.0).sum())
         depth = np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2)
         info = {"iterations": it, "nodes": X, "kept_wire": kept,
                 "volume": float(prism_volumes(X, self.prism_top_, self.prism_bottom_).sum() / self.rest_volume_),
