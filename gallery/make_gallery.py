@@ -27,9 +27,14 @@ skinning) on the default head and on a bust, the skin tinted orange by how far e
 closed and opened 20 degrees by linear blend skinning: no torn flap.
 
 ``expressions_*``: the six emotion prototypes of ``generic_rig/expressions.json``
-(Erdoğdu 2010, Table 3-3) posed by :class:`autobones.expressions.ExpressionModel` on a
-transferred rig, neutral first, all from the front at one scale; the skin is tinted
-orange by how far each vertex moved (relative to the largest motion in the row).
+(Erdoğdu 2010, Table 3-3) on a transferred rig (default head, ICT identity002, the robot, the goat
+and the james scan), neutral first, all from the front at one scale, in three rows: posed by
+:class:`autobones.expressions.ExpressionModel` (the wire-deformer rig of Bibliowicz 2005), the
+same with the layered tissue pass (``pose(tissue=True)``, Lee, Terzopoulos & Waters 1995), and
+ICT-FaceKit's own ARKit shapes carried onto the head (``transfer(..., arkit=True)``) weighted by
+each emotion's AUs through the ``au_arkit`` table (AU23 and AU25 of anger have no ARKit shape);
+the skin is tinted orange by how far each vertex moved (relative to the largest motion in the
+picture).
 
 ``arkit_shapes``: the ARKit blendshapes carried by ``autobones.transfer(..., arkit=True)`` onto
 four heads (rows, top to bottom: the james scan, the ICT identity002 sculpt, the robot, the goat),
@@ -102,6 +107,7 @@ EXPRESSION_HEADS = {  # name: (mesh or None for the default head, landmark file)
     "ict_identity002": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
     "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
     "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
+    "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
 }
 
 REGION_COLOURS = np.array([colorsys.hsv_to_rgb((0.07 + i * 0.618034) % 1.0, 0.45, 0.95) for i in range(16)])
@@ -158,40 +164,76 @@ def landmark_picture(name, out):
     print(f"{path}: {len(lm)} landmarks{extra}")
 
 
-def expression_picture(name, out, size=360):
-    """``expressions_<name>.png``: neutral and the six emotions side by side, front view."""
+def emotion_arkit_weights(model, emotion):
+    """ARKit shape weights (name -> 0..1) standing for an emotion prototype: each of its AUs'
+    intensity on the shapes the definitions' ``au_arkit`` table pairs with that AU; and the AUs
+    the table has no shape for."""
+    from autobones.expressions.definitions import au_arkit_table
+
+    table = {a: row["arkit"] for row in au_arkit_table(model.doc_) for a in row["au"]}
+    weights, unmapped = {}, []
+    for au, v in model.expressions[emotion]["au"].items():
+        names = table.get(int(str(au).rstrip("LR")))
+        if names is None:
+            unmapped.append(f"AU{au}")
+            continue
+        for n in names:
+            weights[n] = min(1.0, weights.get(n, 0.0) + float(v))
+    return weights, unmapped
+
+
+def expression_picture(name, out, size=420):
+    """``expressions_<name>.png``: neutral and the six emotions side by side, front view, in three
+    rows: the wire-deformer rig alone (Bibliowicz 2005), with the layered tissue pass (Lee,
+    Terzopoulos & Waters 1995), and ICT-FaceKit's ARKit shapes carried onto the head, weighted by
+    the AUs of each emotion through the ``au_arkit`` table."""
     from autobones.expressions.model import ExpressionModel
 
     mesh, marks = EXPRESSION_HEADS[name]
     marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
-    rig = autobones.transfer(None if mesh is None else DATA / mesh, marks)
+    rig = autobones.transfer(None if mesh is None else DATA / mesh, marks, arkit=True)
     model = ExpressionModel().fit(rig)
     emotions = ["neutral"] + list(model.expressions)
-    poses = [rig.vertices if e == "neutral" else model.pose(expression=e) for e in emotions]
+    rows = {"wires": [], "wires + tissue": [], "ARKit (ICT shapes)": []}
+    unmapped = {}
+    for e in emotions:
+        if e == "neutral":
+            for r in rows.values():
+                r.append(rig.vertices)
+            continue
+        rows["wires"].append(model.pose(expression=e))
+        rows["wires + tissue"].append(model.pose(expression=e, tissue=True))
+        weights, unmapped[e] = emotion_arkit_weights(model, e)
+        rows["ARKit (ICT shapes)"].append(rig.pose(arkit=weights))
     V0 = rig.frame.to_canonical(rig.vertices)
-    Vs = [rig.frame.to_canonical(P) for P in poses]
-    moved = [np.linalg.norm(P - rig.vertices, axis=1) for P in poses]
-    top = max(float(m.max()) for m in moved) or 1.0
+    moved = {k: [np.linalg.norm(P - rig.vertices, axis=1) for P in r] for k, r in rows.items()}
+    top = max(float(m.max()) for ms in moved.values() for m in ms) or 1.0
     step = 1.1 * float(np.ptp(V0[:, 0]))
+    drop = 1.12 * float(np.ptp(V0[:, 1]))
     F = np.asarray(rig.faces)
-    Vall, Fall, Call, marks_at = [], [], [], []
+    Vall, Fall, Call, marks_at, labels = [], [], [], [], []
     base = np.array([0.85, 0.85, 0.85])
     hot = np.array([1.0, 0.45, 0.1])
-    for k, (V, m) in enumerate(zip(Vs, moved)):
-        off = np.array([k * step, 0.0, 0.0])
-        Vall.append(V + off)
-        Fall.append(F + k * len(V))
-        a = np.clip(m / top, 0.0, 1.0)[:, None] ** 0.7
-        Call.append((1 - a) * base + a * hot)
-        marks_at.append(np.array([V0[:, 0].mean(), V0[:, 1].min() - 0.04 * np.ptp(V0[:, 1]), V0[:, 2].max()]) + off)
+    for j, (row, poses) in enumerate(rows.items()):
+        for k, (P, m) in enumerate(zip(poses, moved[row])):
+            off = np.array([k * step, -j * drop, 0.0])
+            V = rig.frame.to_canonical(P)
+            Vall.append(V + off)
+            Fall.append(F + sum(len(v) for v in Vall[:-1]))
+            a = np.clip(m / top, 0.0, 1.0)[:, None] ** 0.7
+            Call.append((1 - a) * base + a * hot)
+            if j == 0 or k == 0:
+                marks_at.append(np.array([V0[:, 0].mean(), V0[:, 1].min() - 0.03 * np.ptp(V0[:, 1]), V0[:, 2].max()])
+                                + off)
+                labels.append(emotions[k] if k else (row if j else f"{emotions[0]} | {row}"))
     V, F2, C = np.concatenate(Vall), np.concatenate(Fall), np.concatenate(Call)
-    height = float(np.ptp(V0[:, 1])) * 1.12
-    img = render.render_views(V, F2, vertex_colors=C, views=("front",),
-                              size=(int(size * len(emotions) * step / max(height, 1e-12) / 1.1) or size, size),
-                              points=np.array(marks_at), point_labels=emotions, point_color=(60, 60, 60))
+    width = int(size * len(emotions) * step / max(drop, 1e-12) / 1.1) or size
+    img = render.render_views(V, F2, vertex_colors=C, views=("front",), size=(width, size * len(rows)),
+                              points=np.array(marks_at), point_labels=labels, point_color=(60, 60, 60))
     path = Path(out) / f"expressions_{name}.png"
     render.save_png(path, img)
-    print(f"{path}: {', '.join(emotions)}; largest motion {top:.3g} (mesh units)")
+    print(f"{path}: rows {', '.join(rows)}; columns {', '.join(emotions)}; largest motion {top:.3g} (mesh units); "
+          "AUs without an ARKit shape: " + "; ".join(f"{e} {' '.join(u)}" for e, u in unmapped.items() if u))
 
 
 JAW_HEADS = ("goat", "robot")  # keys of TRANSFERS
