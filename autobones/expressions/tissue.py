@@ -1,27 +1,31 @@
 """Layered soft tissue under the skin, solved to static equilibrium (Lee, Terzopoulos & Waters 1995, §4-7).
 
-Below every skin triangle over bone stands a prism of three node layers: the epidermis (the skin
+Below every skin triangle of the face stands a prism of three node layers: the epidermis (the skin
 itself), the fascia (the bottom of the dermal-fatty layer) and the skull estimate (the bottom of
-the muscle layer). Springs join the nodes within each layer and between layers (vertical and
-crossed); the dermal-fatty springs are biphasic, soft up to a strain and stiff beyond it. Each
-layer keeps its volume: a column whose layer is squeezed sideways grows taller by as much (the
-paper's volume force pushes the epidermal nodes along their normal by the volume lost), so skin
-over a shortening muscle bulges. The muscles act on the fascia nodes; epidermis and fascia may
-not enter the skull and slide along it freely.
+the muscle layer), along the skin's smoothed normals at the region's soft-tissue thickness.
+Springs join the nodes within each layer and between layers (vertical and crossed); the
+dermal-fatty springs are biphasic, soft up to a strain and stiff beyond it. Each layer keeps its
+volume: a column squeezed sideways grows taller by as much (the paper's volume force pushes the
+epidermal nodes along their normal by the volume lost), the squeeze spread over a few tissue
+thicknesses since skin resists bending, so skin over a shortening muscle bulges. The muscles
+pull the fascia along the skull; epidermis and fascia may not enter the skull and slide along it.
 
 The paper integrates the equations of motion explicitly. Here each pose is the static equilibrium
 of the same energies, found by local/global iterations (the "projective dynamics" of Bouaziz,
-Martin, Liu, Kavan & Pauly 2014): every term is a squared distance to a projection (a spring to
-its rest length, a column to the height that keeps its volume, a node to the skull's outside), the projections are
-made per element, and one sparse system, factorised once per head, pulls them together. A pose
-is therefore deterministic, and a rest pose is its own equilibrium exactly.
+Martin, Liu, Kavan & Pauly 2014) with Anderson acceleration (Peng, Deng, Zhang & Zhang 2018):
+every term is a squared distance to a projection (a spring to its rest length, a column to the
+height that keeps its volume, a node to the skull's outside), the projections are made per
+element, and one sparse system, factorised once per head, pulls them together. A pose is
+therefore deterministic, and the rest pose is left exactly as it is.
 
 Seed 000's wire deformer stays the driver (Bibliowicz 2005): the muscle force on a fascia node is
 its pull, along the skull, toward where the wire-deformed skin carries it; the skull nodes follow
-the bones (jaw, lids, head); epidermis and fascia find their own place above them. The tissue
-covers the face over the skull and mandible; the skin beyond it (the lips, whose inner surfaces
-face each other, the eyelids, scalp and neck) takes the tissue's correction fading out past its
-border, and no skin triangle the wires leave the right way up is turned over.
+the bones (jaw, lids, head); epidermis and fascia find their own place above them. After the
+solve: the volume the columns' own terms leave is restored as a pressure on the skin the pose
+moves; no column moves further than its thickness from the wire result; the skin beyond the
+tissue (the lips, whose inner surfaces face each other, the eyelids, scalp and neck) takes the
+tissue's correction by a harmonic extension that fades out past its border; and no skin triangle
+the wires leave the right way up is turned over.
 
 Everything is canonical (+Y up, +Z front, head sizes), like :class:`~autobones.expressions.model.ExpressionModel`.
 """
@@ -97,6 +101,12 @@ class TissueModel:
     blend : float
         Distance (face units, along the skin) over which the tissue's correction fades out
         past the tissue's border.
+    spread : float
+        Distance, in median tissue thicknesses, over which a column's squeeze is shared with
+        its neighbours (one heat-diffusion step): the bending stiffness the springs lack.
+    reach : float or None
+        No epidermis or fascia node ends further than this many tissue thicknesses from where
+        the wires put it (None: no limit).
     dermal : (float, float)
         The biphasic dermal-fatty springs' stiffness below and above ``biphasic`` (the paper's
         30 and 70).
@@ -104,7 +114,8 @@ class TissueModel:
         Stretch (deformation ratio minus 1) where the dermal-fatty springs stiffen.
     volume : float
         Weight holding each column of each layer at the height that keeps its volume (its rest
-        area times height over its current area: the volume preservation of §6).
+        area times height over its current area, between half and twice its rest height: the
+        volume preservation of §6; what it leaves is restored as a pressure after the solve).
     drive : float
         Weight pulling each fascia node toward where the wire-deformed skin carries it (the
         muscle forces of §5).
@@ -116,10 +127,11 @@ class TissueModel:
         end, so no node is ever left inside it.
     regions : sequence of str or None
         Region labels (the rig's ``region`` field) whose skin gets tissue: the face over the
-        skull and mandible. Scalp, ears and neck keep the wire result (no expression muscle
-        moves them, and the neck has no bone close under it); the eyelids too, whose skin
-        turns with the lid joints over the eyeball. None: all skin over bone (also what a rig
-        without a region field gets).
+        skull and mandible. Scalp, ears and neck keep the wire result but for the fading
+        correction (no expression muscle moves them, and the neck has no bone close under it);
+        the eyelids too, whose skin turns with the lid joints over the eyeball, and the lips,
+        thick and parted along the mouth line. None: all skin facing out of the head (also
+        what a rig without a region field gets).
     iterations : int
         Local/global iterations per pose (at most).
     tolerance : float
@@ -133,9 +145,7 @@ class TissueModel:
     columns_ : (c,) int64
         Welded skin vertices (``model.surface_``) that carry a tissue column.
     elements_ : (e, 3) int64
-        Skin triangles over bone, as column indices, wound so their normal points out.
-    free_ : (c,) bool
-        Columns whose epidermis and fascia are solved for (the rest keep the wire result).
+        Skin triangles of the tissue, as column indices, wound so their normal points out.
     rest_nodes_ : (3c, 3) float
         Rest nodes, layer by layer (epidermis, fascia, skull), canonical frame, head sizes.
     thickness_ : (c,) float
@@ -180,8 +190,8 @@ class TissueModel:
         if model.region_ is not None and self.regions is not None:
             keep = [i for i, name in enumerate(model.region_labels_) if name in set(self.regions)]
             where &= np.isin(model.region_, keep)
-        over_bone = np.zeros(len(surf.vertices), dtype=bool)
-        over_bone[surf.index[where]] = True
+        in_tissue = np.zeros(len(surf.vertices), dtype=bool)
+        in_tissue[surf.index[where]] = True
         Fs = surf.skin_faces
         # no element across the mouth line (with the lips among the regions: they part there)
         upper = np.zeros(len(surf.vertices), dtype=np.int8)
@@ -189,7 +199,7 @@ class TissueModel:
         upper[surf.index] = model.mouth_["upper"] > 0.5
         zone[surf.index] = model.mouth_["zone"]
         across = (np.ptp(upper[Fs], axis=1) != 0) & (zone[Fs] >= 0.05).any(axis=1)
-        Fe = Fs[over_bone[Fs].all(axis=1) & ~across]
+        Fe = Fs[in_tissue[Fs].all(axis=1) & ~across]
         if len(Fe) == 0:
             raise AutobonesError("tissue: no skin of the tissue's regions on this head (no triangle whose corners "
                                  f"all lie in {', '.join(self.regions or ())} and face out of the head)")
