@@ -261,16 +261,14 @@ class TissueModel:
         t = (float(self.spread) * float(np.median(T))) ** 2
         self._spread_mass = Mc.tocsr()
         self._spread_solve = factor_spd((Mc + t * Lc).tocsc())
-        self._adjacency = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[i, j], np.r_[j, i])), shape=(nc, nc))
         self.springs_ = _Springs(*(np.concatenate([s[m] for s in springs]) for m in range(6)))
 
         # prisms: the dermal-fatty layer over the fascia, the muscle layer over the skull; each
-        # keeps its volume through the height of its columns (area x height)
+        # keeps its volume through the height of its columns (true layer area x height)
         self.prism_top_ = np.concatenate([Fc, nc + Fc])
         self.prism_bottom_ = np.concatenate([nc + Fc, 2 * nc + Fc])
         self.elements_ = Fc
-        across = self._across(Ns)
-        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer, None) for layer in range(3)])
+        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer) for layer in range(3)])
         self.layer_height_ = np.stack([df * T, (1.0 - df) * T])
         self.column_weight_ = float(self.volume) * col_area / self.layer_height_**2    # (2, c)
 
@@ -291,11 +289,12 @@ class TissueModel:
         return u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
 
     @staticmethod
-    def _layer_areas(X, Fc, layer, across):
-        """Area (c,) around each column in node layer ``layer`` of ``X`` (3c, 3), measured across
-        the columns: a third of each element's area at that layer projected on the plane normal
-        to ``across`` (e, 3), the unit mean column direction at its corners (:meth:`_across`).
-        Area times height along the columns is then the volume however the layers tilt."""
+    def _layer_areas(X, Fc, layer, across=None):
+        """Area (c,) around each column in node layer ``layer`` of ``X`` (3c, 3): a third of each
+        element's area at that layer; with ``across`` (e, 3), the unit mean column direction at
+        its corners (:meth:`_across`), that area projected on the plane normal to it (area times
+        height along the columns is then the volume however the layers tilt: the pressure's
+        measure)."""
         nc = len(X) // 3
         n = triangle_normals(X[layer * nc:(layer + 1) * nc], Fc)
         a = 0.5 * np.linalg.norm(n, axis=1) if across is None else 0.5 * np.abs(np.einsum("ij,ij->i", n, across))
@@ -482,7 +481,7 @@ class TissueModel:
             p1 = s.rest[:, None] * u
             p2 = np.minimum(length, s.limit * s.rest)[:, None] * u
             # each layer's column keeps area x height: squeezed sideways, it grows taller
-            a0, a1 = self._layer_areas(X, Fc, 0, None), self._layer_areas(X, Fc, 1, None)
+            a0, a1 = self._layer_areas(X, Fc, 0), self._layer_areas(X, Fc, 1)
             squeeze = np.log(np.clip(area_rest / np.maximum(np.stack([a0, a1]), 1e-300), 0.5, 2.0))
             ratio = np.exp(self._spread_solve(self._spread_mass @ squeeze.T).T)
             v = np.concatenate([X[:nc] - X[nc:2 * nc], X[nc:2 * nc] - X[2 * nc:]])
