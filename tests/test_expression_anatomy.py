@@ -1,0 +1,169 @@
+"""Issue #16 item 2, the anatomy seed 000 lacks: lids hinging on the line through the eye corners,
+and the linear muscles procerus, nasalis, risorius and platysma (Lee, Terzopoulos & Waters 1995's
+linear muscles, in generic_rig/muscles.json, driving FACS action units of Ekman, Friesen & Hager
+2002). The project's own heads only: the default head and the ICT identity in tests/data."""
+import copy
+
+import numpy as np
+import pytest
+
+import autobones
+from autobones.expressions.bones import turn_lids
+from autobones.expressions.definitions import load_expressions, model_parameters
+from autobones.expressions.lids import attach_hinge_share, closing_angle, lid_hinges
+from autobones.expressions.model import ExpressionModel
+from autobones.geometry.rotations import line_turn, x_turn
+
+from shared_data import ROOT, data
+
+HEADS = {
+    "default": (None, ROOT / "generic_rig" / "default_head.landmarks.json"),
+    "ict": (data("ict/identity002.obj"), data("ict/identity002.landmarks.json")),
+}
+
+
+@pytest.fixture(scope="module")
+def model():
+    cache = {}
+
+    def get(name, definitions=None):
+        if name not in cache:
+            cache[name] = autobones.transfer(*HEADS[name])
+        rig = cache[name]
+        return rig, ExpressionModel(definitions).fit(rig)
+
+    return get
+
+
+def _canonical_landmarks(rig):
+    return {k: rig.frame.to_canonical(np.asarray(v, float).reshape(1, 3))[0]
+            for k, v in rig.extra["landmarks"].items()}
+
+
+def _nearest_skin(rig, m, point):
+    idx = np.flatnonzero(m.skin_)
+    return idx[np.argmin(np.linalg.norm(rig.vertices[idx] - np.asarray(point), axis=1))]
+
+
+# ------------------------------------------------------------------------------ lids
+def test_line_turn_is_a_rotation_about_its_axis():
+    rng = np.random.default_rng(0)
+    P = rng.normal(size=(50, 3))
+    ang = rng.uniform(-1, 1, 50)
+    # about +X it is the lid joints' x_turn
+    assert np.allclose(line_turn(P, [1.0, 0, 0], ang), x_turn(P, ang), atol=1e-12)
+    u = np.array([0.9, -0.2, 0.3])
+    u /= np.linalg.norm(u)
+    Q = P + line_turn(P, u, ang)
+    # distances to the axis and positions along it are kept; a positive angle turns right-handedly
+    assert np.allclose(Q @ u, P @ u)
+    assert np.allclose(np.linalg.norm(np.cross(Q, u), axis=1), np.linalg.norm(np.cross(P, u), axis=1))
+    a, b = np.cross(u, [0, 1.0, 0]), None
+    b = a + line_turn(a[None], u, 0.5)[0]
+    assert np.cross(a, b) @ u > 0
+    assert abs(closing_angle(a, b, np.zeros(3), u) - np.degrees(0.5)) < 1e-9
+
+
+def test_lids_hinge_on_the_line_through_the_eye_corners(model):
+    """The default head's lids hinge, near their margins, on the line through the exocanthion
+    and the endocanthion (raised to the fissure's mid-height), oriented to the subject's left and
+    mirrored between the eyes; away from the margins the turn is about the eye pivot."""
+    rig, m = model("default")
+    L = _canonical_landmarks(rig)
+    points, axes, close, share = m.lid_hinges_
+    for e, s in enumerate("lr"):
+        ex, en = L[f"exocanthion_{s}"], L[f"endocanthion_{s}"].copy()
+        en[1] = 0.5 * (L[f"palpebrale_superius_{s}"][1] + L[f"palpebrale_inferius_{s}"][1])
+        u = (ex - en) / np.linalg.norm(ex - en)
+        assert np.allclose(points[e], ex) and abs(abs(axes[e] @ u) - 1.0) < 1e-12 and axes[e][0] > 0
+        assert close[e] > m.lid_close_deg_[e] > 0        # a hinge in front of the pivot turns farther
+    assert np.allclose(axes[0] * [1, -1, -1], axes[1], atol=1e-6)   # mirror images
+    assert share.min() >= 0 and 0.99 < share.max() <= 1.0
+    assert not share[~m.skin_ & ~m.attached_].any()
+    # the margin hinges, the brow does not
+    top = _nearest_skin(rig, m, rig.extra["landmarks"]["palpebrale_superius_l"])
+    brow = _nearest_skin(rig, m, rig.extra["landmarks"]["brow_middle_l"])
+    assert share[top] > 0.8 and share[brow] == 0.0
+
+
+def test_the_default_head_still_blinks_closed(model):
+    """AU43 brings each upper margin down onto the lower one at least as far as the eye pivot's
+    turn alone did (the default head's lids are one closed surface, so its margin weights are
+    partial and neither closes fully), with nothing turned over."""
+    from autobones.expressions.unfold import flipped_faces
+
+    rig, m = model("default")
+    doc = copy.deepcopy(load_expressions())
+    doc["model"]["eyelids"]["hinge"] = "pivot"
+    _, m0 = model("default", doc)
+    assert np.allclose(m.lid_close_deg_, m0.lid_close_deg_) and (m.lid_close_deg_ > 0).all()
+    lm = rig.extra["landmarks"]
+    V, V0 = m.pose(au={43: 1.0}), m0.pose(au={43: 1.0})
+    for s in "lr":
+        top = _nearest_skin(rig, m, lm[f"palpebrale_superius_{s}"])
+        bot = _nearest_skin(rig, m, lm[f"palpebrale_inferius_{s}"])
+        rest, hinged, pivot = (np.linalg.norm(X[top] - X[bot]) for X in (rig.vertices, V, V0))
+        assert hinged < 0.75 * rest and hinged <= pivot, (s, rest, hinged, pivot)
+    assert not flipped_faces(rig.vertices, V, rig.faces).any()
+
+
+def test_without_a_corner_landmark_the_lids_turn_about_the_eye_pivot(model):
+    """A missing endocanthion (or ``hinge`` "pivot") leaves that eye to the eye pivot's +X turn of
+    Bibliowicz 2005: no hinge share, and turn_lids then gives exactly the old turn."""
+    rig, m = model("default")
+    L = _canonical_landmarks(rig)
+    eyes = {s: m.pivots_[m.bones_.index(f"eye_{s}")] for s in "lr"}
+    lid = m.params_["eyelids"]
+    L2 = {k: v for k, v in L.items() if k != "endocanthion_r"}
+    points, axes, close, share = lid_hinges(m.canonical_, m.skin_, L2, eyes, m.face_unit_, lid, m.surface_)
+    assert np.allclose(axes[1], [1, 0, 0]) and close[1] == 0 and np.allclose(points[1], eyes["r"])
+    assert close[0] > 0                                   # the other eye keeps its hinge
+    right = m.canonical_[:, 0] < -0.1 * m.face_unit_
+    assert not share[right].any() and share[~right].max() > 0.9
+    doc = copy.deepcopy(load_expressions())
+    doc["model"]["eyelids"]["hinge"] = "pivot"
+    _, _, _, none = lid_hinges(m.canonical_, m.skin_, L, eyes, m.face_unit_, model_parameters(doc)["eyelids"],
+                               m.surface_)
+    assert not none.any()
+    # share 0: the turn is the eye pivot's, to the last bit
+    d0 = np.zeros_like(m.canonical_)
+    amounts = np.array([1.0, 0.7, 0.4, 0.2])
+    old = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_)
+    new = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_,
+                    (points, axes, close, np.zeros(len(d0))))
+    assert np.array_equal(old, new)
+
+
+def test_a_lash_row_hinges_with_its_margin_as_one_piece(model):
+    """ICT's upper lash rows sit on the margin: they take the hinge whole (share 1) and turn as one
+    rigid piece about the corner line; the eye shells, rooted on both lids, follow the skin."""
+    from autobones.geometry.topology import mesh_parts
+
+    rig, m = model("ict")
+    parts = mesh_parts(len(rig.vertices), rig.faces)
+    share = m.lid_hinges_[3]
+    V = m.pose_parameters(np.zeros(len(m.muscle_names_)), 0.0, [1.0, 1.0, 0.0, 0.0])
+    hinged = 0
+    for p in np.unique(parts[m.attached_]):
+        rows = np.flatnonzero(parts == p)
+        if np.ptp(m.lid_weights_[:, rows], axis=1).max() == 0.0 and m.lid_weights_[:2, rows[0]].max() > 0.5:
+            assert np.ptp(share[rows]) == 0.0
+            if share[rows[0]] == 1.0:
+                hinged += 1
+                E = rig.faces[np.isin(rig.faces, rows).all(axis=1)]
+                e0 = np.linalg.norm(rig.vertices[E[:, 0]] - rig.vertices[E[:, 1]], axis=1)
+                e1 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+                assert np.allclose(e0, e1, rtol=1e-9)
+    assert hinged >= 6, hinged                               # 3 upper lash rows per eye
+
+
+def test_attached_parts_take_the_hinge_share_of_their_roots():
+    share = np.array([0.0, 0.2, 0.9, 0.0, 0.0, 0.0])
+    W = np.zeros((4, 6))
+    W[0, :3] = 1.0                                          # an upper lid of three skin vertices
+    attached = np.array([False, False, False, True, True, True])
+    source = np.array([0, 1, 2, 2, 1, 0])
+    parts = [(np.array([3, 4]), np.array([3])), (np.array([5]), np.array([5]))]
+    out = attach_hinge_share(share, W, attached, source, parts)
+    assert out[:3].tolist() == share[:3].tolist()
+    assert out[3] == out[4] == 1.0 and out[5] == 0.0
