@@ -5,7 +5,9 @@ through the eye pivots (Bibliowicz 2005, §4.2, eyelid joints). Near the margins
 on the line through the eye's two corners (:func:`lid_hinges`, issue #16): the tarsal plate is
 held at the canthi by the canthal tendons, so the margin and the lash row on it turn as one piece
 about the corners (as ICT-FaceKit's upper lash rows do, 90 % rigidly about an axis through the
-outer corner), while the lid skin above rolls over the eyeball about its pivot. Their weights are built from the
+outer corner), while the lid skin above rolls over the eyeball about its pivot. A lid that opens
+wider (a negative amount: the levator retracting the tarsal plate over the globe) turns about
+the pivot only. Their weights are built from the
 palpebral landmarks: an ellipse about the fissure, the fissure opening as 1 - u^2 between the
 fixed medial eye corner and the looser lateral one. Separate small parts touching the lids
 (eyelashes, eye-occlusion or tear-line shells) follow the skin where they touch it.
