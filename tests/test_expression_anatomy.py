@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import autobones
+from autobones.errors import AutobonesError
 from autobones.expressions.bones import turn_lids
 from autobones.expressions.definitions import load_expressions, model_parameters
 from autobones.expressions.lids import attach_hinge_share, closing_angle, lid_hinges
@@ -167,3 +168,97 @@ def test_attached_parts_take_the_hinge_share_of_their_roots():
     out = attach_hinge_share(share, W, attached, source, parts)
     assert out[:3].tolist() == share[:3].tolist()
     assert out[3] == out[4] == 1.0 and out[5] == 0.0
+
+
+# ------------------------------------------------------------------------------ new linear muscles
+NEW = ("procerus", "nasalis", "risorius", "platysma")
+
+
+def test_the_new_muscles_come_with_the_generic_rig(model):
+    """Each new muscle is defined on both sides in generic_rig/muscles.json, built into the generic
+    rig with its influence field ``muscle/<name>`` and carried onto a head by ``transfer``, and its
+    type has a shortening in expressions.json (a muscle that moves)."""
+    from autobones.rig_building.build import load_muscle_definitions
+
+    defs = {m["name"]: m for m in load_muscle_definitions()}
+    types = load_expressions()["muscle_types"]
+    rig, m = model("default")
+    for t in NEW:
+        assert types[t]["shortening"] > 0
+        for s in "lr":
+            name = f"{t}_{s}"
+            assert defs[name]["type"] == t and defs[name]["side"] == s
+            assert name in m.muscle_names_
+            f = np.asarray(rig.fields[f"muscle/{name}"])
+            assert f.max() > 0.9 and (f > 0.1).sum() >= 10, name
+            # its contraction moves the skin, on its own side only
+            g = np.linalg.norm(m.muscle_basis_[m.muscle_names_.index(name)], axis=1)
+            x = m.canonical_[:, 0] * (1 if s == "l" else -1)
+            assert g.max() > 0.01 * m.face_unit_ and g[x < -0.2 * m.face_unit_].max() < 1e-3 * g.max(), name
+
+
+def _moves(rig, m, au, landmark):
+    """Canonical displacement (3,) in face units of the skin nearest ``landmark`` under ``au``."""
+    i = _nearest_skin(rig, m, rig.extra["landmarks"][landmark])
+    V = rig.frame.to_canonical(m.pose(au=au))
+    return (V[i] - m.canonical_[i]) / m.face_unit_
+
+
+def test_each_new_muscle_pulls_as_its_anatomy_says(model):
+    """Procerus draws the glabella down over the nasal root, nasalis the side of the dorsum down
+    and out, risorius the mouth corner out, platysma the corner and lower lip down (canonical:
+    +Y up, +X the subject's left); each pulls its insertion toward its origin."""
+    rig, m = model("default")
+    mj = m.joints_
+
+    def pull(name, landmark):
+        c = np.zeros(len(m.muscle_names_))
+        c[m.muscle_names_.index(name)] = 1.0
+        if landmark == "insertion":        # the skin at the muscle's insertion
+            idx = np.flatnonzero(m.skin_)
+            i = idx[np.argmin(np.linalg.norm(m.canonical_[idx] - mj.insertions[mj.names.index(name)], axis=1))]
+        else:
+            i = _nearest_skin(rig, m, rig.extra["landmarks"][landmark])
+        V = rig.frame.to_canonical(m.pose_parameters(c))
+        return (V[i] - m.canonical_[i]) / m.face_unit_
+
+    for name, landmark, check in (
+            ("procerus_l", "glabella", lambda d: d[1] < -0.01),
+            ("nasalis_l", "insertion", lambda d: d[1] < -0.002 and d[0] > 0.0),
+            ("risorius_l", "cheilion_l", lambda d: d[0] > 0.01),
+            ("risorius_r", "cheilion_r", lambda d: d[0] < -0.01),
+            ("platysma_l", "cheilion_l", lambda d: d[1] < -0.01),
+            ("platysma_l", "labiale_inferius", lambda d: d[1] < -0.005)):
+        d = pull(name, landmark)
+        j = mj.names.index(name)
+        assert check(d), (name, landmark, d)
+        assert d @ (mj.origins[j] - mj.insertions[j]) > 0, name
+
+
+def test_the_action_units_use_the_new_muscles(model):
+    """AU4 draws the nasal root down with the corrugators (procerus), AU9 too; AU20 stretches the
+    corners out (risorius), AU21 (platysma) draws them down; AU11 exists; one-sided AU20 leaves the
+    other half still; a rig transferred before these muscles existed still poses every AU."""
+    rig, m = model("default")
+    aus = load_expressions()["action_units"]
+    assert "procerus" in aus["4"]["muscles"] and "procerus" in aus["9"]["muscles"]
+    assert "nasalis" in aus["9"]["muscles"] and "nasalis" in aus["11"]["muscles"]
+    assert "risorius" in aus["20"]["muscles"] and aus["21"]["muscles"] == {"platysma": 1.0}
+    assert _moves(rig, m, {4: 1.0}, "glabella")[1] < -0.01
+    assert _moves(rig, m, {9: 1.0}, "glabella")[1] < -0.005
+    assert _moves(rig, m, {20: 1.0}, "cheilion_l")[0] > 0.01 and _moves(rig, m, {20: 1.0}, "cheilion_r")[0] < -0.01
+    assert _moves(rig, m, {21: 1.0}, "cheilion_l")[1] < -0.01
+    assert np.linalg.norm(_moves(rig, m, {11: 1.0}, "alare_l")) > 0.01
+    V = m.pose(au={"20L": 1.0})
+    d = np.linalg.norm(V - rig.vertices, axis=1)
+    right = m.canonical_[:, 0] < -0.15 * m.face_unit_
+    assert d[right].max() < 1e-3 * d.max()
+    # an old rig (26 muscles): the AUs keep what its muscles give, the new types give nothing
+    old = copy.copy(rig)
+    old.muscles = [mm for mm in rig.muscles if mm["type"] not in NEW]
+    m_old = ExpressionModel().fit(old)
+    assert len(m_old.muscle_names_) == len(m.muscle_names_) - 8
+    for au in (4, 9, 11, 20, 21):
+        assert np.isfinite(m_old.pose(au={au: 1.0})).all()
+    with pytest.raises(AutobonesError):
+        m_old.pose(muscles={"procerus": 1.0})

@@ -256,6 +256,8 @@ class ExpressionModel:
                 raise AutobonesError(f"action unit {key}: intensity {a} is not a finite number")
             d = self.action_units[key]
             for m, v in d.get("muscles", {}).items():
+                if m not in self.joints_.names and m not in self.joints_.types and m in self.doc_["muscle_types"]:
+                    continue   # a rig transferred before this muscle type joined the generic rig
                 c += a * float(v) * self._muscle_mask(m, side)
             jaw += a * float(d.get("jaw_deg", 0.0)) * (1.0 if side is None else 0.5)
             for part, v in d.get("eyelids", {}).items():
