@@ -479,7 +479,7 @@ def test_cli_export_writes_usd_and_says_what_it_wrote(saved, tmp_path, cli):
     assert out.returncode == 0, out.stderr
     line = out.stdout.strip()
     assert "\n" not in line and line.startswith("head.usdc: UsdSkel, 5 joints") and "0 errors" in line
-    assert "18 blend shapes" in line and (tmp_path / "head.usdc").is_file()
+    assert "20 blend shapes" in line and (tmp_path / "head.usdc").is_file()
 
 
 def test_cli_export_refuses_bad_input_in_one_line_and_writes_nothing(saved, tmp_path, cli):
