@@ -71,7 +71,8 @@ def test_lids_hinge_on_the_line_through_the_eye_corners(model):
     mirrored between the eyes; away from the margins the turn is about the eye pivot."""
     rig, m = model("default")
     L = _canonical_landmarks(rig)
-    points, axes, close, share = m.lid_hinges_
+    points, axes, close, share, joints = m.lid_hinges_
+    assert joints.tolist() == [True, True, False, False]          # the upper lids hinge
     for e, s in enumerate("lr"):
         ex, en = L[f"exocanthion_{s}"], L[f"endocanthion_{s}"].copy()
         en[1] = 0.5 * (L[f"palpebrale_superius_{s}"][1] + L[f"palpebrale_inferius_{s}"][1])
@@ -116,14 +117,14 @@ def test_without_a_corner_landmark_the_lids_turn_about_the_eye_pivot(model):
     eyes = {s: m.pivots_[m.bones_.index(f"eye_{s}")] for s in "lr"}
     lid = m.params_["eyelids"]
     L2 = {k: v for k, v in L.items() if k != "endocanthion_r"}
-    points, axes, close, share = lid_hinges(m.canonical_, m.skin_, L2, eyes, m.face_unit_, lid, m.surface_)
+    points, axes, close, share, joints = lid_hinges(m.canonical_, m.skin_, L2, eyes, m.face_unit_, lid, m.surface_)
     assert np.allclose(axes[1], [1, 0, 0]) and close[1] == 0 and np.allclose(points[1], eyes["r"])
     assert close[0] > 0                                   # the other eye keeps its hinge
     right = m.canonical_[:, 0] < -0.1 * m.face_unit_
     assert not share[right].any() and share[~right].max() > 0.9
     doc = copy.deepcopy(load_expressions())
     doc["model"]["eyelids"]["hinge"] = "pivot"
-    _, _, _, none = lid_hinges(m.canonical_, m.skin_, L, eyes, m.face_unit_, model_parameters(doc)["eyelids"],
+    _, _, _, none, _ = lid_hinges(m.canonical_, m.skin_, L, eyes, m.face_unit_, model_parameters(doc)["eyelids"],
                                m.surface_)
     assert not none.any()
     # share 0: the turn is the eye pivot's, to the last bit
@@ -131,7 +132,13 @@ def test_without_a_corner_landmark_the_lids_turn_about_the_eye_pivot(model):
     amounts = np.array([1.0, 0.7, 0.4, 0.2])
     old = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_)
     new = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_,
-                    (points, axes, close, np.zeros(len(d0))))
+                    (points, axes, close, np.zeros(len(d0)), np.ones(4, bool)))
+    assert np.array_equal(old, new)
+    # the lower lids keep the pivot's turn: a lower-only pose is the old one exactly
+    low = np.array([0.0, 0.0, 1.0, 0.8])
+    old = turn_lids(d0, m.canonical_, low, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_)
+    new = turn_lids(d0, m.canonical_, low, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_,
+                    m.lid_hinges_)
     assert np.array_equal(old, new)
 
 
@@ -262,3 +269,15 @@ def test_the_action_units_use_the_new_muscles(model):
         assert np.isfinite(m_old.pose(au={au: 1.0})).all()
     with pytest.raises(AutobonesError):
         m_old.pose(muscles={"procerus": 1.0})
+
+
+def test_an_opening_lid_turns_about_the_eye_pivot_only(model):
+    """AU5 (a negative upper amount: the levator retracts the lid over the eyeball) is the eye
+    pivot's turn, hinge or not."""
+    rig, m = model("default")
+    d0 = np.zeros_like(m.canonical_)
+    amounts = np.array([-0.3, -0.3, 0.0, 0.0])
+    old = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_)
+    new = turn_lids(d0, m.canonical_, amounts, m.lid_weights_, m.lid_close_deg_, m.lid_lower_range_, m.lid_pivots_,
+                    m.lid_hinges_)
+    assert np.array_equal(old, new) and np.abs(new).max() > 0

@@ -22,7 +22,8 @@ def turn_lids(d, V, amounts, weights, close_deg, lower_range, pivots, hinges=Non
     ``weights`` (4, n) lid weights; ``pivots`` (2, 3) eye pivots. Each vertex turns about +X
     through its eye's pivot by its weight times the angle, from where ``d`` put it
     (Bibliowicz 2005). ``hinges``, optional, (points (2, 3), unit axes (2, 3), closing angles
-    (2,) degrees, share (n,)) (``lids.lid_hinges``): a vertex's displacement is then
+    (2,) degrees, share (n,), joints (4,) bool: which lid joints hinge) (``lids.lid_hinges``):
+    for those joints a vertex's displacement is
     ``1 - share`` times that turn plus ``share`` times the turn by its weight times the amount
     times the hinge's own closing angle about the hinge line (through the eye corners), for a
     lid that closes (amount > 0: orbicularis sweeps the margin down about the canthi); a lid that
@@ -39,7 +40,7 @@ def turn_lids(d, V, amounts, weights, close_deg, lower_range, pivots, hinges=Non
         scale = amounts[q] * w[rows] * (-lower_range if q >= 2 else 1.0)
         P = V[rows] + d[rows]
         turn = x_turn(P - pivots[e], np.radians(close_deg[e]) * scale)
-        if hinges is not None and amounts[q] > 0 and hinges[3][rows].any():
+        if hinges is not None and amounts[q] > 0 and hinges[4][q] and hinges[3][rows].any():
             h = hinges[3][rows, None]
             turn = (1.0 - h) * turn + h * line_turn(P - hinges[0][e], hinges[1][e], np.radians(hinges[2][e]) * scale)
         d[rows] += turn

@@ -5,7 +5,8 @@ through the eye pivots (Bibliowicz 2005, §4.2, eyelid joints). Near the margins
 on the line through the eye's two corners (:func:`lid_hinges`, issue #16): the tarsal plate is
 held at the canthi by the canthal tendons, so the margin and the lash row on it turn as one piece
 about the corners (as ICT-FaceKit's upper lash rows do, 90 % rigidly about an axis through the
-outer corner), while the lid skin above rolls over the eyeball about its pivot. A lid that opens
+outer corner), while the lid skin above rolls over the eyeball about its pivot. The lower lids,
+whose tarsal plates are a third as tall, keep the pivot's turn unless ``hinge_lower``. A lid that opens
 wider (a negative amount: the levator retracting the tarsal plate over the globe) turns about
 the pivot only. Their weights are built from the
 palpebral landmarks: an ellipse about the fissure, the fissure opening as 1 - u^2 between the
@@ -126,6 +127,9 @@ def lid_hinges(V, skin, landmarks, eyes, fu, lid, surface):
         one, degrees (0 where there is no hinge).
     share : (n,) float
         The hinge's share in [0, 1] of each vertex's lid turn (skin only).
+    joints : (4,) bool
+        Which lid joints (:data:`LIDS` order) hinge: the upper ones, and the lower ones with
+        ``lid["hinge_lower"]``.
     """
     n = len(V)
     points = np.zeros((2, 3))
@@ -169,7 +173,8 @@ def lid_hinges(V, skin, landmarks, eyes, fu, lid, surface):
         # back to a full share on the margins (the diffusion lowers the peak)
         share = np.clip(share * (peak / max(share.max(), 1e-12)), 0.0, 1.0) * skin
         share[share < 1e-3] = 0.0            # the diffusion reaches the whole skin: keep to the lids
-    return points, axes, close, share
+    lower = bool(lid.get("hinge_lower", False))
+    return points, axes, close, share, np.array([True, True, lower, lower])
 
 
 def eye_lid_weights(V, skin, centre, corners, gap_to_skin, fu, lid):

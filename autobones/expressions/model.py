@@ -108,8 +108,8 @@ class ExpressionModel:
         Angle (degrees) that brings each upper lid margin to its lower lid (l, r).
     lid_hinges_ : tuple
         Where the lids hinge on the line through the eye corners: points (2, 3), unit axes
-        (2, 3), closing angles (2,) degrees, the hinge's share of each vertex's turn (n,)
-        (:func:`lids.lid_hinges`).
+        (2, 3), closing angles (2,) degrees, the hinge's share of each vertex's turn (n,), which
+        lid joints hinge (4,) bool (:func:`lids.lid_hinges`).
     face_unit_ : float
         Exocanthion distance in head sizes.
     params_ : dict
@@ -175,8 +175,8 @@ class ExpressionModel:
         self.attached_, source, parts = lid_attachments(V, skin, surf.part, eye_w, lw.max(axis=0), fu,
                                                         lid["attached_part_size"])
         self.lid_weights_ = attach_lid_weights(lw, self.attached_, source, parts)
-        hp, ha, hc, share = lid_hinges(V, skin, L, eyes, fu, lid, surf)
-        self.lid_hinges_ = (hp, ha, hc, attach_hinge_share(share, lw, self.attached_, source, parts))
+        hp, ha, hc, share, hinged = lid_hinges(V, skin, L, eyes, fu, lid, surf)
+        self.lid_hinges_ = (hp, ha, hc, attach_hinge_share(share, lw, self.attached_, source, parts), hinged)
         self.muscle_basis_, self.crease_basis_ = ride_lids(G, creases, margin_release(lw, lid["margin_hold"]),
                                                            self.attached_, source)
 
