@@ -19,7 +19,7 @@ from test_view import CLI, ROBOT, ROBOT_MARKS, _env, _open, browser  # noqa: F40
 
 @pytest.fixture(scope="module")
 def arkit_rig(tmp_path_factory):
-    """The robot transferred with its 52 ARKit shapes, saved with its 18 AU morph targets too."""
+    """The robot transferred with its 52 ARKit shapes, saved with its 20 AU morph targets too."""
     d = tmp_path_factory.mktemp("arkit_view")
     rig = autobones.transfer(data(ROBOT), ROBOT_MARKS, arkit=True)
     rig.save(str(d / "robot.glb"), expressions=True)
@@ -32,7 +32,7 @@ def test_threejs_sees_the_52_arkit_names_and_jaw_open_moves_by_the_glbs_displace
     prim = mesh["primitives"][0]
     names = mesh["extras"]["targetNames"]
     aus = [n for n in names if re.fullmatch(r"AU\d+[LR]?", n)]
-    assert len(aus) == 18 and names == aus + list(ARKIT_NAMES)  # the file: AUs, then ARKit's 52
+    assert len(aus) == 20 and names == aus + list(ARKIT_NAMES)  # the file: AUs, then ARKit's 52
     size = json.loads(arkit_rig.with_suffix("").with_suffix(".rig.json").read_text())["frame"]["head_size"]
 
     p = subprocess.Popen(CLI + ["view", str(arkit_rig), "--no-browser"], cwd=ROOT, env=_env(),

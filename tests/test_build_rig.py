@@ -172,7 +172,7 @@ def test_face_half_split_at_the_mouth(rig, head):
 def test_muscles_definitions_cover_seed_001_types():
     defs = load_muscle_definitions()
     types = {m["type"] for m in defs}
-    assert len(types) == 13 and len(defs) == 26
+    assert len(types) == 17 and len(defs) == 34
     for m in defs:
         assert abs(sum(m["origin"].values()) - 1) < 1e-9 and abs(sum(m["insertion"].values()) - 1) < 1e-9
         assert set(m["origin"]) | set(m["insertion"]) <= set(NAMES)
@@ -180,7 +180,7 @@ def test_muscles_definitions_cover_seed_001_types():
 
 def test_muscles_origin_under_skin_insertion_on_skin(rig, head):
     V, F, _ = head
-    assert len(rig.muscles) == 26
+    assert len(rig.muscles) == 34
     O = np.array([m["origin"] for m in rig.muscles])
     I = np.array([m["insertion"] for m in rig.muscles])
     assert (winding(V, F, O) > 0.5).all()
@@ -321,7 +321,7 @@ def test_committed_default_rig_is_up_to_date(rig):
     np.testing.assert_allclose(back.skeleton.heads, rig.skeleton.heads, atol=1e-9)
     assert back.units == "metres"
     meta = json.loads((GR / "default" / "rig.json").read_text())
-    assert len(meta["muscles"]) == 26
+    assert len(meta["muscles"]) == 34
 
 
 def test_default_rig_face_belongs_to_head_and_jaw_not_neck():

@@ -11,16 +11,24 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import AutobonesError
-from ..geometry.rotations import align_rotation, axis_rotation, euler_rotation, x_turn
+from ..geometry.rotations import align_rotation, axis_rotation, euler_rotation, line_turn, x_turn
 
 
-def turn_lids(d, V, amounts, weights, close_deg, lower_range, pivots):
+def turn_lids(d, V, amounts, weights, close_deg, lower_range, pivots, hinges=None):
     """Displacement ``d`` (n, 3) with the lid joints turned (a new array).
 
     ``V`` (n, 3) rest vertices; ``amounts`` (4,) per lid joint (order ``lids.LIDS``; upper 1
     closes the lid by ``close_deg`` (2,) of its eye, lower 1 raises by ``lower_range`` of it);
     ``weights`` (4, n) lid weights; ``pivots`` (2, 3) eye pivots. Each vertex turns about +X
-    through its eye's pivot by its weight times the angle, from where ``d`` put it.
+    through its eye's pivot by its weight times the angle, from where ``d`` put it
+    (Bibliowicz 2005). ``hinges``, optional, (points (2, 3), unit axes (2, 3), closing angles
+    (2,) degrees, share (n,), joints (4,) bool: which lid joints hinge) (``lids.lid_hinges``):
+    for those joints a vertex's displacement is
+    ``1 - share`` times that turn plus ``share`` times the turn by its weight times the amount
+    times the hinge's own closing angle about the hinge line (through the eye corners), for a
+    lid that closes (amount > 0: orbicularis sweeps the margin down about the canthi); a lid that
+    opens (amount < 0: the levator draws the tarsal plate back over the eyeball) turns about the
+    eye pivot only.
     """
     d = np.array(d, dtype=np.float64)
     for q in np.flatnonzero(amounts):
@@ -29,10 +37,13 @@ def turn_lids(d, V, amounts, weights, close_deg, lower_range, pivots):
         rows = np.flatnonzero(w > 0)
         if len(rows) == 0:
             continue
-        ang = np.radians(close_deg[e]) * amounts[q] * w[rows]
-        if q >= 2:
-            ang = -lower_range * ang
-        d[rows] += x_turn(V[rows] + d[rows] - pivots[e], ang)
+        scale = amounts[q] * w[rows] * (-lower_range if q >= 2 else 1.0)
+        P = V[rows] + d[rows]
+        turn = x_turn(P - pivots[e], np.radians(close_deg[e]) * scale)
+        if hinges is not None and amounts[q] > 0 and hinges[4][q] and hinges[3][rows].any():
+            h = hinges[3][rows, None]
+            turn = (1.0 - h) * turn + h * line_turn(P - hinges[0][e], hinges[1][e], np.radians(hinges[2][e]) * scale)
+        d[rows] += turn
     return d
 
 

@@ -40,6 +40,10 @@ MODEL_DEFAULTS = {
         "smoothing": None,              # fu; None: the muscle fields' ``smoothing``
         "margin_hold": 0.85,            # share of the muscles' pull the lid margins ignore
         "attached_part_size": 0.5,      # fu: lashes and eye shells up to this size
+        "hinge": "pivot",               # the lids turn about +X through the eye pivot only
+        "hinge_medial_height": 0.0,     # corners hinge: through the endocanthion itself
+        "hinge_band": 0.0,              # fissure heights: the corners hinge's reach from the margin
+        "hinge_lower": False,           # the lower lids hinge too
     },
     "mouth_parts": {"reach": 0.9, "band": 0.03, "rigid_size": 0.5, "pharynx": 0.1},   # fu
 }

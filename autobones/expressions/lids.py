@@ -1,7 +1,14 @@
 """Eyelids: four lid joints turning about the eye pivots, and the small parts riding the lids.
 
 The lid joints (upper/lower, left/right, order :data:`LIDS`) rotate about the canonical +X axis
-through the eye pivots (Bibliowicz 2005, §4.2, eyelid joints). Their weights are built from the
+through the eye pivots (Bibliowicz 2005, §4.2, eyelid joints). Near the margins they hinge instead
+on the line through the eye's two corners (:func:`lid_hinges`, issue #16): the tarsal plate is
+held at the canthi by the canthal tendons, so the margin and the lash row on it turn as one piece
+about the corners (as ICT-FaceKit's upper lash rows do, 90 % rigidly about an axis through the
+outer corner), while the lid skin above rolls over the eyeball about its pivot. The lower lids,
+whose tarsal plates are a third as tall, keep the pivot's turn unless ``hinge_lower``. A lid that opens
+wider (a negative amount: the levator retracting the tarsal plate over the globe) turns about
+the pivot only. Their weights are built from the
 palpebral landmarks: an ellipse about the fissure, the fissure opening as 1 - u^2 between the
 fixed medial eye corner and the looser lateral one. Separate small parts touching the lids
 (eyelashes, eye-occlusion or tear-line shells) follow the skin where they touch it.
@@ -56,6 +63,120 @@ def eye_corners(landmarks, centre, side, fu):
     return ex, en, ps, pi
 
 
+def fissure_height(V, corners, fu, through=None):
+    """Signed height (n,) of each vertex above the fissure's line (canonical +Y, head sizes) and
+    the fissure height (float): the line runs endocanthion -> ``through`` (3,) (default the
+    palpebrale points' midpoint; a palpebrale point gives that margin's line) -> exocanthion,
+    piecewise linear in X. ``V`` (n, 3); ``corners`` :func:`eye_corners`."""
+    ex, en, ps, pi = corners
+    mid = 0.5 * (ps + pi) if through is None else through
+    gap = max(float(np.linalg.norm(ps - pi)), 1e-3 * fu)
+    xo = np.array([en[0], mid[0], ex[0]])
+    oo = np.argsort(xo)
+    return V[:, 1] - np.interp(V[:, 0], xo[oo], np.array([en[1], mid[1], ex[1]])[oo]), gap
+
+
+def closing_angle(ps, pi, point, axis):
+    """Degrees of the right-handed turn about the line through ``point`` (3,) along the unit
+    ``axis`` (3,) that brings the upper margin ``ps`` (3,) onto the half-plane of the lower
+    margin ``pi`` (3,)."""
+    a, b = ps - point, pi - point
+    a = a - (a @ axis) * axis
+    b = b - (b @ axis) * axis
+    return float(np.degrees(np.arctan2(np.cross(a, b) @ axis, a @ b)))
+
+
+def lid_hinges(V, skin, landmarks, eyes, fu, lid, surface):
+    """Where the lids hinge on the line through the eye corners instead of the eye pivot's axis.
+
+    Each eye with both corner landmarks (``endocanthion_{s}``, ``exocanthion_{s}``) hinges on the
+    line through them, the endocanthion raised by ``lid["hinge_medial_height"]`` of its height
+    below the fissure's middle (the palpebrale midpoint; 0 keeps the corner itself); the line is
+    oriented toward the subject's left (+X), so a positive turn closes an upper lid as a turn
+    about +X does. The hinge's share of a skin vertex's turn is 1 between the margins' lines
+    (each through the corners and its palpebrale point), fading to 0 at ``lid["hinge_band"]``
+    fissure heights above the upper one or below the lower one (the tarsal plates), diffused as
+    the lid weights are and rescaled to its peak before the diffusion; the rest of the turn is about the eye pivot's +X axis. ``lid["hinge"]``
+    other than "corners", or a missing corner landmark: no hinge for that eye (share 0, the
+    turn of Bibliowicz 2005).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertices, canonical frame (+Y up, +Z front), head sizes.
+    skin : (n,) bool
+        Skin vertices.
+    landmarks : dict
+        Name -> (3,) canonical point.
+    eyes : dict
+        Side (``l``/``r``) -> eye pivot (3,).
+    fu : float
+        Face unit (head sizes).
+    lid : dict
+        Resolved ``model.eyelids`` (``hinge``, ``hinge_medial_height``, ``hinge_band``, ``smoothing``).
+    surface : SkinSurface
+        For the diffusion (:mod:`surface`).
+
+    Returns
+    -------
+    points, axes : (2, 3) float
+        A point (the exocanthion) and the unit direction of each eye's hinge (l, r; +X through
+        the eye pivot, or the origin, where there is none).
+    close_deg : (2,) float
+        The turn about the hinge that brings the upper margin (palpebrale superius) to the lower
+        one, degrees (0 where there is no hinge).
+    share : (n,) float
+        The hinge's share in [0, 1] of each vertex's lid turn (skin only).
+    joints : (4,) bool
+        Which lid joints (:data:`LIDS` order) hinge: the upper ones, and the lower ones with
+        ``lid["hinge_lower"]``.
+    """
+    n = len(V)
+    points = np.zeros((2, 3))
+    axes = np.tile([1.0, 0.0, 0.0], (2, 1))
+    close = np.zeros(2)
+    share = np.zeros((2, n))
+    band = float(lid.get("hinge_band", 0.0))
+    for e, s in enumerate("lr"):
+        c = eyes.get(s)
+        if c is None:
+            continue
+        points[e] = c
+        need = [f"{b}_{s}" for b in ("exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius")]
+        if str(lid.get("hinge", "pivot")) != "corners" or not all(k in landmarks for k in need[:2]):
+            continue
+        corners = eye_corners(landmarks, c, s, fu)   # the palpebrale points placed when missing
+        ex, medial = np.asarray(corners[0], dtype=np.float64), np.array(corners[1], dtype=np.float64)
+        if all(k in landmarks for k in need[2:]):
+            medial[1] += float(lid.get("hinge_medial_height", 0.0)) * (0.5 * (corners[2][1] + corners[3][1]) - medial[1])
+        u = ex - medial
+        norm = float(np.linalg.norm(u))
+        if not np.isfinite(norm) or norm <= 1e-6 * fu:
+            continue
+        u = u / norm if u[0] >= 0 else -u / norm
+        points[e], axes[e] = ex, u
+        close[e] = closing_angle(corners[2], corners[3], ex, u)
+        if band > 0:
+            s_up, gap = fissure_height(V, corners, fu, corners[2])
+            s_lo, _ = fissure_height(V, corners, fu, corners[3])
+            outside = np.maximum(s_up, 0.0) + np.maximum(-s_lo, 0.0)     # 0 between the margins
+            # the eye's own skin: as far from its centre as the lid weights reach, in front of the pivot
+            half = 0.5 * abs(ex[0] - corners[1][0])
+            near = ((np.abs(V[:, 0] - 0.5 * (ex[0] + corners[1][0])) < float(lid["width_margin"]) * half)
+                    & (V[:, 2] > c[2]))
+            share[e] = ramp(outside, band * gap, 0.0) * near * skin
+    share = share.max(axis=0)
+    t_l = (float(lid["smoothing"]) * fu) ** 2
+    if t_l > 0 and share.any():
+        peak = share.max()
+        share = surface.diffuse(share[:, None], t_l)[:, 0]
+        # back to a full share on the margins (the diffusion lowers the peak)
+        share = np.clip(share * (peak / max(share.max(), 1e-12)), 0.0, 1.0) * skin
+        share[share < 1e-3] = 0.0            # the diffusion reaches the whole skin: keep to the lids
+    lower = bool(lid.get("hinge_lower", False))
+    return points, axes, close, share, np.array([True, True, lower, lower])
+
+
 def eye_lid_weights(V, skin, centre, corners, gap_to_skin, fu, lid):
     """Upper and lower lid joint weights of one eye, and its closing angle.
 
@@ -87,11 +208,7 @@ def eye_lid_weights(V, skin, centre, corners, gap_to_skin, fu, lid):
     """
     c = centre
     ex, en, ps, pi = corners
-    mid = 0.5 * (ps + pi)
-    gap = max(float(np.linalg.norm(ps - pi)), 1e-3 * fu)
-    xo = np.array([en[0], mid[0], ex[0]])
-    oo = np.argsort(xo)
-    s_f = V[:, 1] - np.interp(V[:, 0], xo[oo], np.array([en[1], mid[1], ex[1]])[oo])
+    s_f, gap = fissure_height(V, corners, fu)
     a = float(lid["width_margin"]) * 0.5 * abs(ex[0] - en[0])
     cx = 0.5 * (ex[0] + en[0])
     depth = float(lid["depth"]) * fu
@@ -228,6 +345,28 @@ def attach_lid_weights(weights, attached, source, parts):
         if on_upper >= 0.9 or on_upper <= 0.1:
             W[:, part_rows] = rw.max(axis=1)[:, None]
     return W
+
+
+def attach_hinge_share(share, weights, attached, source, parts):
+    """The hinge share (n,) with the attached parts following (a new array): each attached vertex
+    takes its ``source``'s share, and a part that turns as one piece with one lid (a lash row,
+    as :func:`attach_lid_weights` decides from the lid ``weights`` (4, n)) turns all about the
+    hinge when the largest share at its roots is at least 1/2 (it hinges with the margin it sits
+    on), else all about the pivot. ``attached``, ``source``, ``parts``:
+    :func:`lid_attachments`."""
+    out = share.copy()
+    rows = np.flatnonzero(attached)
+    out[rows] = share[source[rows]]
+    W = weights.copy()
+    W[:, rows] = W[:, source[rows]]
+    for part_rows, roots in parts:
+        rw = W[:, roots]
+        on_upper = np.mean(rw[:2].max(axis=0) >= rw[2:].max(axis=0))
+        if on_upper >= 0.9 or on_upper <= 0.1:
+            # one rigid turn: all about the hinge or all about the pivot (a blend of two
+            # turns about different axes would bend the part)
+            out[part_rows] = float(out[roots].max() >= 0.5)
+    return out
 
 
 def ride_lids(G, creases, release, attached, source):

@@ -52,7 +52,8 @@ from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
 from .definitions import load_expressions, model_parameters, muscle_types, parse_au_key
 from .jaw import jaw_glide, jaw_weights
-from .lids import LIDS, attach_lid_weights, lid_attachments, lid_weights, margin_release, ride_lids
+from .lids import (LIDS, attach_hinge_share, attach_lid_weights, lid_attachments, lid_hinges, lid_weights,
+                   margin_release, ride_lids)
 from .mouth import mouth_corners, mouth_line
 from .mouth_parts import inner_mouth_parts, mouth_part_weights
 from .muscles import influence_fields, muscles_from_rig
@@ -105,6 +106,10 @@ class ExpressionModel:
         Upper/lower lid joint weights, order :data:`LIDS`.
     lid_close_deg_ : (2,) float
         Angle (degrees) that brings each upper lid margin to its lower lid (l, r).
+    lid_hinges_ : tuple
+        Where the lids hinge on the line through the eye corners: points (2, 3), unit axes
+        (2, 3), closing angles (2,) degrees, the hinge's share of each vertex's turn (n,), which
+        lid joints hinge (4,) bool (:func:`lids.lid_hinges`).
     face_unit_ : float
         Exocanthion distance in head sizes.
     params_ : dict
@@ -173,6 +178,8 @@ class ExpressionModel:
         self.attached_, source, parts = lid_attachments(V, skin, surf.part, eye_w, lw.max(axis=0), fu,
                                                         lid["attached_part_size"])
         self.lid_weights_ = attach_lid_weights(lw, self.attached_, source, parts)
+        hp, ha, hc, share, hinged = lid_hinges(V, skin, L, eyes, fu, lid, surf)
+        self.lid_hinges_ = (hp, ha, hc, attach_hinge_share(share, lw, self.attached_, source, parts), hinged)
         self.muscle_basis_, self.crease_basis_ = ride_lids(G, creases, margin_release(lw, lid["margin_hold"]),
                                                            self.attached_, source)
 
@@ -252,6 +259,8 @@ class ExpressionModel:
                 raise AutobonesError(f"action unit {key}: intensity {a} is not a finite number")
             d = self.action_units[key]
             for m, v in d.get("muscles", {}).items():
+                if m not in self.joints_.names and m not in self.joints_.types and m in self.doc_["muscle_types"]:
+                    continue   # a rig transferred before this muscle type joined the generic rig
                 c += a * float(v) * self._muscle_mask(m, side)
             jaw += a * float(d.get("jaw_deg", 0.0)) * (1.0 if side is None else 0.5)
             for part, v in d.get("eyelids", {}).items():
@@ -438,7 +447,8 @@ class ExpressionModel:
         plus a translation); ``unfold`` relaxes skin the lids and jaw fold over (:mod:`unfold`)."""
         V = self.canonical_
         lids = np.zeros(4) if eyelids is None else np.asarray(eyelids, dtype=np.float64).reshape(4)
-        d = turn_lids(d, V, lids, self.lid_weights_, self.lid_close_deg_, self.lid_lower_range_, self.lid_pivots_)
+        d = turn_lids(d, V, lids, self.lid_weights_, self.lid_close_deg_, self.lid_lower_range_, self.lid_pivots_,
+                      getattr(self, "lid_hinges_", None))
         if jaw_deg:
             if "jaw" not in self.bones_:
                 raise AutobonesError("jaw_deg: the rig has no 'jaw' bone")

@@ -1,5 +1,5 @@
 """Rotations: about the axes, from Euler angles, between two directions, the best similarity between point sets,
-the +X turn of points, the 24 axis turns."""
+the +X turn of points and their turn about any axis, the 24 axis turns."""
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -83,3 +83,13 @@ def x_turn(P, angle):
     axis, the subject's left)."""
     ca, sa = np.cos(angle), np.sin(angle)
     return np.c_[np.zeros(len(P)), (ca - 1.0) * P[:, 1] - sa * P[:, 2], sa * P[:, 1] + (ca - 1.0) * P[:, 2]]
+
+
+def line_turn(P, axis, angle):
+    """Displacement (m, 3) of points ``P`` (m, 3), given relative to a point of the line, turned by
+    ``angle`` (radians, scalar or (m,)) right-handedly about the unit direction ``axis`` (3,)
+    (Rodrigues' formula); :func:`x_turn` when ``axis`` is +X."""
+    u = np.asarray(axis, dtype=np.float64)
+    ang = np.broadcast_to(np.asarray(angle, dtype=np.float64), (len(P),))[:, None]
+    ca, sa = np.cos(ang), np.sin(ang)
+    return (ca - 1.0) * P + sa * np.cross(u, P) + (1.0 - ca) * (P @ u)[:, None] * u[None, :]
