@@ -501,10 +501,11 @@ class TissueModel:
         for it in range(1, int(self.iterations) + 1):
             g = step(x)
             f = g - x
-            if np.sqrt(np.mean(np.einsum("ij,ij->i", f, f) / T2)) <= float(self.tolerance):
+            step2 = np.einsum("ij,ij->i", f, f)          # each node's squared step, read twice
+            if np.sqrt(np.mean(step2 / T2)) <= float(self.tolerance):
                 x = g
                 break
-            res = float(np.sqrt(np.einsum("ij,ij->", f, f)))
+            res = float(np.sqrt(step2.sum()))
             if res > best:
                 hist_g, hist_f, prev = [], [], None
             best = min(best, res)
