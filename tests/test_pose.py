@@ -309,7 +309,7 @@ def test_cli_user_story(tmp_path, capsys):
     code, out, err = _cli(["transfer", ROOT / "generic_rig" / "default_head.obj", "--landmarks",
                            HEADS["default"][1], "--expressions", "-o", "head.glb"], tmp_path, capsys)
     assert code == 0, err
-    assert "20 morph targets" in out and len(out.strip().splitlines()) == 1
+    assert f"{len(AUS)} morph targets" in out and len(out.strip().splitlines()) == 1
     assert len(_targets(tmp_path / "head.glb")[0]) == len(AUS)
     rig = autobones.load_rig(tmp_path / "head.glb")
     for args, kw in ((["--expression", "happiness", "-o", "happy.obj"], {"expression": "happiness"}),

@@ -58,7 +58,7 @@ MODEL_REQUIRED = {
 }
 
 # fallbacks of the optional keys of a muscle type (``shortening`` 0: the type does not move)
-MUSCLE_TYPE_DEFAULTS = {"shortening": 0.0, "slide": False, "galea": None}
+MUSCLE_TYPE_DEFAULTS = {"shortening": 0.0, "slide": False, "galea": None, "sphincter": None}
 
 
 def load_expressions(path=None):
@@ -126,7 +126,8 @@ def muscle_types(doc):
     """Muscle type name -> its definition over :data:`MUSCLE_TYPE_DEFAULTS` (new dicts).
 
     ``wire`` (fractions origin -> insertion where the wire runs) and ``dropoff`` (muscle widths)
-    have no fallback: a type a rig's muscle uses must set them.
+    have no fallback: a linear type a rig's muscle uses must set them; a sphincter type
+    (``sphincter``: :mod:`sphincters`) needs neither.
     """
     return {name: {**MUSCLE_TYPE_DEFAULTS, **spec} for name, spec in doc["muscle_types"].items()}
 

@@ -12,7 +12,9 @@ other, each a pure function in its own module:
    locators riding its own muscle (the force profile of Lee, Terzopoulos & Waters 1995 along
    it), the neighbouring muscles whose influence fields cover it, and a rest locator. The
    constraint weights do not depend on the contractions, so the skin displacement is a fixed
-   linear map of the contraction vector: one (n, 3) basis field per muscle.
+   linear map of the contraction vector: one (n, 3) basis field per muscle. The sphincters
+   (``sphincters.py``: orbicularis oris and oculi, which Bibliowicz leaves out) have no wire: each
+   draws the skin inside its ring toward the ring's centre (Waters 1987), linear too.
 2. skull non-penetration (``skull.py``): a skin point may sink along its rest normal by at most
    the soft-tissue thickness of its region.
 3. creases (``creases.py``): frontalis contractions press horizontal furrows into the forehead,

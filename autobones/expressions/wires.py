@@ -24,6 +24,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import AutobonesError
 from ..geometry.laplacian import factor_spd
+from .sphincters import is_sphincter, sphincter_field
 
 
 def dropoff(x):
@@ -243,7 +244,7 @@ def muscle_wires(V, skin, joints, influence, types, mouth, fu, params):
     wires = []
     for i, nm in enumerate(joints.names):
         spec = types.get(joints.types[i])
-        if spec is None:
+        if spec is None or is_sphincter(spec):
             continue
         o, ip = joints.origins[i], joints.insertions[i]
         o_skin = V[skin_idx[skin_tree.query(np.atleast_2d(o))[1]][0]]
@@ -310,14 +311,21 @@ def smooth_muscle_fields(G, one_lip, surface, mouth, t):
 
 
 def muscle_basis(V, skin, joints, influence, types, mouth, fu, params, surface):
-    """The muscle stage of the model: wires (:func:`muscle_wires`), smoothed
+    """The muscle stage of the model: wires (:func:`muscle_wires`) and sphincters
+    (:func:`sphincters.sphincter_field`), smoothed
     (:func:`smooth_muscle_fields`, over ``params["smoothing"]`` fu) and, with
     ``params["normalise_overlaps"]``, damped where wires overlap (dropoffs summing to at most 1).
 
     Arguments as for :func:`muscle_wires`, plus ``surface`` (SkinSurface). Returns the fields
     (k, n, 3) float (canonical, head sizes per unit contraction) and the wires.
     """
-    G, coverage, wires = muscle_wires(V, skin, joints, influence, types, mouth, fu, params)
+    # sphincters have no wire and no line to pull a neighbour's locators along: their own field
+    sph = np.array([is_sphincter(types.get(t)) for t in joints.types], dtype=bool)
+    G, coverage, wires = muscle_wires(V, skin, joints, np.where(sph[:, None], 0.0, influence), types, mouth, fu,
+                                      params)
+    for i in np.flatnonzero(sph):
+        G[i] = sphincter_field(V, joints.origins[i], joints.insertions[i], influence[i] * skin,
+                               types[joints.types[i]])
     t_s = (float(params["smoothing"]) * fu) ** 2
     if t_s > 0:
         # muscles whose wire pulls one lip are smoothed with the mouth line cut, the corner

@@ -6,7 +6,8 @@ every layer is a rule on the contract landmarks (``spec/landmarks.md``), so the
 same definitions work on the default head and on any other landmarked head.
 Muscles follow Lee, Terzopoulos & Waters 1995, §5 (linear muscles with width and
 falloff) and Bibliowicz 2005, §4.2 (a joint from an origin under the skin to an
-insertion on the skin).
+insertion on the skin); a sphincter (``kind`` "sphincter") is an elliptical ring on the skin
+after Waters 1987 (centre and lateral point; :mod:`autobones.geometry.ring`).
 
 Everything is computed in the head's canonical frame (:func:`autobones.orient.detect_frame`:
 +Y up, +Z front, +X subject's left, head sizes) and returned in the input frame
@@ -76,6 +77,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..geometry.laplacian import diffuse, laplacian
+from ..geometry.ring import ring_frame, ring_profile
 from ..geometry.smooth import step
 from ..geometry.topology import mesh_parts
 from ..skeleton import Skeleton
@@ -415,6 +417,8 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
     i0 = _combo(m["insertion"], L, f"{m['name']} insertion")
     _, fid, C = igl.point_mesh_squared_distance(np.array([o0, i0]), np.ascontiguousarray(Vc), Fi)
     o_skin, ins = C[0], C[1]
+    if m.get("kind") == "sphincter":
+        return _sphincter(m, o_skin, ins, Vc)
     tri = Vc[F[fid[0]]]
     n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
     n /= max(np.linalg.norm(n), 1e-300)
@@ -448,3 +452,23 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
                 "origin": origin, "insertion": ins, "width_canonical": width,
                 "origin_depth_canonical": depth, "inside": bool(wn(origin)[0] > 0.5)})
     return out, infl.astype(np.float64)
+
+
+def _sphincter(m, centre, lateral, Vc):
+    """A sphincter muscle (``kind`` "sphincter"): origin = the ring's centre on the skin, insertion =
+    its lateral point on the skin; influence = the ring's profile (:func:`ring_profile`)."""
+    axes, half = ring_frame(centre, lateral)
+    hole = m.get("hole")
+    try:
+        _, infl = ring_profile(Vc, centre, axes, half, m["reach"], core=float(m.get("core", 0.3)),
+                               hole=None if hole is None else (float(hole[0]), float(hole[1])),
+                               split=m.get("split"), depth=float(m.get("depth", 0.6)))
+    except AutobonesError as exc:
+        raise AutobonesError(f"muscle definition {m['name']}: {exc}") from None
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        raise AutobonesError(f"muscle definition {m['name']}: incomplete sphincter ({exc!r})") from None
+    out = {k: v for k, v in m.items() if k not in ("origin", "insertion")}
+    out.update({"origin_definition": dict(m["origin"]), "insertion_definition": dict(m["insertion"]),
+                "origin": centre, "insertion": lateral, "width_canonical": half,
+                "origin_depth_canonical": 0.0, "inside": False})
+    return out, infl
