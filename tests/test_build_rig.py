@@ -172,7 +172,8 @@ def test_face_half_split_at_the_mouth(rig, head):
 def test_muscles_definitions_cover_seed_001_types():
     defs = load_muscle_definitions()
     types = {m["type"] for m in defs}
-    assert len(types) == 17 and len(defs) == 34
+    assert len(types) == 20 and len(defs) == 40
+    assert sum(m.get("kind") == "sphincter" for m in defs) == 6     # orbicularis oris (2 parts) and oculi
     for m in defs:
         assert abs(sum(m["origin"].values()) - 1) < 1e-9 and abs(sum(m["insertion"].values()) - 1) < 1e-9
         assert set(m["origin"]) | set(m["insertion"]) <= set(NAMES)
@@ -180,12 +181,16 @@ def test_muscles_definitions_cover_seed_001_types():
 
 def test_muscles_origin_under_skin_insertion_on_skin(rig, head):
     V, F, _ = head
-    assert len(rig.muscles) == 34
-    O = np.array([m["origin"] for m in rig.muscles])
-    I = np.array([m["insertion"] for m in rig.muscles])
+    linear = [m for m in rig.muscles if m.get("kind") != "sphincter"]
+    rings = [m for m in rig.muscles if m.get("kind") == "sphincter"]
+    assert len(linear) == 34 and len(rings) == 6
+    O = np.array([m["origin"] for m in linear])
+    I = np.array([m["insertion"] for m in linear])
     assert (winding(V, F, O) > 0.5).all()
     assert surface_distance(V, F, I).max() < 1e-6
     assert (surface_distance(V, F, O) > surface_distance(V, F, I) + 0.003).all()
+    # a sphincter's centre and lateral point lie on the skin
+    assert surface_distance(V, F, np.array([m[k] for m in rings for k in ("origin", "insertion")])).max() < 1e-6
     for m in rig.muscles:
         f = rig.fields["muscle/" + m["name"]]
         assert f.min() >= 0 and f.max() <= 1 and f.max() > 0.3, m["name"]
@@ -321,7 +326,7 @@ def test_committed_default_rig_is_up_to_date(rig):
     np.testing.assert_allclose(back.skeleton.heads, rig.skeleton.heads, atol=1e-9)
     assert back.units == "metres"
     meta = json.loads((GR / "default" / "rig.json").read_text())
-    assert len(meta["muscles"]) == 34
+    assert len(meta["muscles"]) == 40
 
 
 def test_default_rig_face_belongs_to_head_and_jaw_not_neck():

@@ -7,7 +7,7 @@ reproduces the project's linear blend skinning (``expressions.bones.blend_bones`
 joint motions to 1e-5 of the head size. FBX: written by Blender and re-imported by Blender, the
 bones, vertex groups (all influences) and shape keys match the rig.
 
-Rigs: the built-in default head transferred (5 bones, 20 AU morph targets, muscles) and placed
+Rigs: the built-in default head transferred (5 bones, one morph target per AU, muscles) and placed
 (18 bones, up to 12 influences per vertex), both made in a few seconds. usd-core and Blender
 are required: when either is missing the tests fail with what to install, they do not skip.
 """
@@ -23,6 +23,7 @@ from scipy.spatial.transform import Rotation
 import autobones
 from autobones.errors import AutobonesError
 from autobones.expressions.bones import blend_bones, bone_transforms
+from autobones.expressions.definitions import load_expressions
 from autobones.io.gltf import FLOAT, pack_glb, read_accessor, read_glb
 from autobones.rig import sidecar_paths
 
@@ -37,6 +38,7 @@ from autobones.export.usd import (all_influences, guess_meters_per_unit, joint_p
 
 ROOT = Path(__file__).resolve().parents[1]
 TOL = 1e-5  # of the head size
+N_AUS = len(load_expressions()["action_units"])   # one morph target per AU
 
 
 @pytest.fixture(scope="module")
@@ -207,7 +209,7 @@ def test_usd_passes_usd_validation_and_reads_back_the_rig(saved, name, tmp_path)
     # blend shapes: every morph target, its name and its offsets
     names = list(binding.GetBlendShapesAttr().Get() or [])
     targets = binding.GetBlendShapeTargetsRel().GetTargets()
-    assert len(names) == len(targets) == len(src.morph_targets) == (20 if name == "transferred" else 0)
+    assert len(names) == len(targets) == len(src.morph_targets) == (N_AUS if name == "transferred" else 0)
     for shape, path, (orig, delta) in zip(names, targets, src.morph_targets):
         bs = UsdSkel.BlendShape(stage.GetPrimAtPath(path))
         assert shape == path.name == orig and bs.GetPrim().GetCustomDataByKey("autobones:name") == orig
@@ -445,7 +447,7 @@ def test_fbx_round_trip_through_blender_keeps_bones_groups_and_shape_keys(saved,
     assert rep["bone_head_error"] <= TOL, rep
     assert rep["vertex_count_match"] and rep["vertex_error"] <= TOL, rep
     assert rep["weight_error"] <= 1e-6, rep  # every influence, not the glb's four
-    assert rep["shape_keys_match"] and rep["shape_keys"] == (20 if name == "transferred" else 0), rep
+    assert rep["shape_keys_match"] and rep["shape_keys"] == (N_AUS if name == "transferred" else 0), rep
     if name == "transferred":
         assert rep["shape_key_error"] <= TOL, rep
     assert rep["markers_match"], rep
@@ -479,7 +481,7 @@ def test_cli_export_writes_usd_and_says_what_it_wrote(saved, tmp_path, cli):
     assert out.returncode == 0, out.stderr
     line = out.stdout.strip()
     assert "\n" not in line and line.startswith("head.usdc: UsdSkel, 5 joints") and "0 errors" in line
-    assert "20 blend shapes" in line and (tmp_path / "head.usdc").is_file()
+    assert f"{N_AUS} blend shapes" in line and (tmp_path / "head.usdc").is_file()
 
 
 def test_cli_export_refuses_bad_input_in_one_line_and_writes_nothing(saved, tmp_path, cli):

@@ -39,7 +39,7 @@ def test_goat_muscle_pairs_are_mirror_images(goat):
     rig, plane, exex = goat
     mus = {m["name"]: m for m in rig.extra["muscles"]}
     pairs = [k for k in mus if k.endswith("_l") and k[:-2] + "_r" in mus]
-    assert len(pairs) == 17
+    assert len(pairs) == 20
     for end in ("origin", "insertion"):
         miss = [np.linalg.norm(reflect(mus[k][end], *plane) - np.asarray(mus[k[:-2] + "_r"][end])) / exex
                 for k in pairs]

@@ -51,7 +51,7 @@ def test_weights_partition_and_skeleton(transferred, name):
     assert W.shape == (len(rig.vertices), len(rig.skeleton)) and W.min() >= 0
     np.testing.assert_allclose(W.sum(axis=1), 1.0, atol=1e-9)
     assert {"neck", "head", "jaw", "eye_l", "eye_r"} <= set(rig.skeleton.names)
-    assert len(rig.extra["muscles"]) == 34
+    assert len(rig.extra["muscles"]) == 40
     assert rig.fields["region"].shape == (len(rig.vertices),)
 
 
@@ -195,7 +195,7 @@ def test_cli_transfer_and_build_rig(tmp_path):
     assert r.returncode == 0, r.stderr
     side = json.loads((tmp_path / "goat.rig.json").read_text())
     assert [b["name"] for b in side["bones"]][:5] == ["neck", "head", "jaw", "eye_l", "eye_r"]
-    assert len(side["muscles"]) == 34 and "region" in side["field_labels"]
+    assert len(side["muscles"]) == 40 and "region" in side["field_labels"]
     npz = np.load(tmp_path / "goat.weights.npz")
     assert "field/region" in npz and npz["weights"].shape[0] == len(load_mesh(mesh)[0])
     # bad landmarks through the CLI: one line, exit 2, nothing written
@@ -269,7 +269,7 @@ def test_transfer_leaves_a_given_generic_rig_untouched():
 
 def test_typed_sidecar_attributes_round_trip(tmp_path):
     rig = autobones.transfer(None, ROOT / "generic_rig" / "default_head.landmarks.json")
-    assert rig.source == "default_head.obj" and len(rig.muscles) == 34
+    assert rig.source == "default_head.obj" and len(rig.muscles) == 40
     assert rig.field_labels["region"][0] == "scalp" and rig.landmarks["stomion"].shape == (3,)
     assert rig.facial_bone_partner is None and rig.batch is None
     assert dict(rig.extra) == {k: v for k, v in rig.sidecar().items() if k in rig.sidecar_extra()}
