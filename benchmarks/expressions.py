@@ -13,7 +13,7 @@ Run by hand, not by the tests::
 
 Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
 landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
-jaw and lids with bounded linear least squares over the 26 contractions, then
+jaw and lids with bounded linear least squares over the muscle contractions (40 since the sphincters), then
 ``scipy.optimize.least_squares`` on the full nonlinear pose), on all vertices and
 on the skin only; the same parameters applied to identity000 and identity001,
 with the baselines neutral, copy by vertex index (100 % by construction: ICT's
@@ -282,7 +282,7 @@ C_MAX = 2.0
 
 def contraction_bounds(model):
     """(k,) lower and upper bounds: muscles only pull (>= 0), except the frontalis joints, which
-    the model lengthens for AU4 (procerus / depressor supercilii are not among its muscles)."""
+    the model lengthens for AU4 (depressor supercilii is not among its muscles)."""
     lo = np.array([-0.5 if t.startswith("frontalis") else 0.0 for t in model.joints_.types])
     return lo, np.full(len(lo), C_MAX)
 
@@ -355,7 +355,7 @@ def fit_rig(model, X, sel, refine=30, solve=None):
     """Rig parameters reproducing the target positions ``X`` (n, 3) over the vertices ``sel``.
 
     Stage 1 (variable projection on a grid): for a jaw angle and lid amounts the pose is affine in
-    the 26 contractions (skull clamp aside), solved by bounded linear least squares; the jaw is
+    the muscle contractions (skull clamp aside), solved by bounded linear least squares; the jaw is
     searched on a 2-degree grid (lids 0), then each of the 4 lids on a 0.1 grid in turn (the
     others held); a second such sweep (the jaw grid again with those lids, the lids again),
     then the jaw on a 0.5-degree grid around its best. ``solve(jaw, lids) -> (c, residual norm)``

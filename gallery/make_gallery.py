@@ -236,6 +236,39 @@ def expression_picture(name, out, size=420):
           "AUs without an ARKit shape: " + "; ".join(f"{e} {' '.join(u)}" for e, u in unmapped.items() if u))
 
 
+SPHINCTER_HEADS = ("default_head", "ict_identity002", "james", "robot", "goat")  # keys of EXPRESSION_HEADS
+SPHINCTER_AUS = (6, 18, 22, 23, 24)
+
+
+def sphincters_picture(out, width=1800):
+    """``expressions_sphincters.png``: the action units of the sphincters (Waters 1987's rings:
+    orbicularis oculi for AU6, orbicularis oris for AU18, AU22, AU23, AU24) at intensity 1 on each head
+    of :data:`SPHINCTER_HEADS`, front view, tinted by motion (one scale a row); one row a head."""
+    from autobones.expressions.model import ExpressionModel
+
+    rows = []
+    for name in SPHINCTER_HEADS:
+        mesh, marks = EXPRESSION_HEADS[name]
+        marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+        rig = autobones.transfer(None if mesh is None else DATA / mesh, marks)
+        model = ExpressionModel().fit(rig)
+        poses = [rig.vertices] + [model.pose(au={a: 1.0}) for a in SPHINCTER_AUS]
+        labels = [name] + [f"AU{a} {model.action_units[str(a)]['name'].lower()}" for a in SPHINCTER_AUS]
+        img, top = motion_strip(rig, poses, labels, width)
+        rows.append(img)
+        print(f"{name}: largest motion {top:.3g} mesh units")
+    path = Path(out) / "expressions_sphincters.png"
+    render.save_png(path, np.concatenate([_pad_width(r, width) for r in rows], axis=0))
+    print(f"{path}: {', '.join(SPHINCTER_HEADS)}; AU{', AU'.join(map(str, SPHINCTER_AUS))}")
+
+
+def _pad_width(img, width):
+    """``img`` padded with white on the right to ``width`` pixels (strips of heads of other shapes)."""
+    if img.shape[1] >= width:
+        return img[:, :width]
+    return np.concatenate([img, np.full((img.shape[0], width - img.shape[1], 3), 255, img.dtype)], axis=1)
+
+
 JAW_HEADS = ("goat", "robot")  # keys of TRANSFERS
 
 
@@ -497,7 +530,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
-                    + ["expressions", "jaw_open_goat_robot", "place_head_turn", "transfer_symmetric_robot"]
+                    + ["expressions", "expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
+                       "transfer_symmetric_robot"]
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
@@ -505,7 +539,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
-                          + expression_pictures + ["jaw_open_goat_robot", "place_head_turn", "transfer_symmetric_robot"]
+                          + expression_pictures + ["expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
+                                                   "transfer_symmetric_robot"]
                           + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
@@ -525,6 +560,9 @@ def main(argv=None):
             continue
         if name == "transfer_symmetric_robot":
             symmetric_picture(args.out)
+            continue
+        if name == "expressions_sphincters":
+            sphincters_picture(args.out)
             continue
         if name.startswith("expressions_"):
             expression_picture(name[len("expressions_"):], args.out)
