@@ -214,3 +214,16 @@ def test_an_incomplete_sphincter_definition_is_one_clear_error():
                    {**ring, "reach": 2.0}, {**ring, "hole": [0.2]}):
         with pytest.raises(AutobonesError, match="orbicularis_oris_l"):
             build_rig(V, F, lm, muscles=[broken])
+
+
+def test_a_muscle_type_without_wire_or_ring_is_one_clear_error(default):
+    """A definitions file whose muscle type has neither a wire (linear) nor a sphincter entry is
+    named in one error, not a KeyError from inside the wires."""
+    rig, _ = default
+    doc = copy.deepcopy(load_expressions())
+    doc["muscle_types"]["orbicularis_oris"] = {"shortening": 0.3}
+    with pytest.raises(AutobonesError, match="orbicularis_oris"):
+        ExpressionModel(doc).fit(rig)
+    doc["muscle_types"]["orbicularis_oris"] = {"shortening": 0.3, "sphincter": {"pull": "spiral"}}
+    with pytest.raises(AutobonesError, match="pull"):
+        ExpressionModel(doc).fit(rig)

@@ -61,6 +61,7 @@ from .mouth_parts import inner_mouth_parts, mouth_part_weights
 from .muscles import influence_fields, muscles_from_rig
 from .rig_inputs import rig_inputs
 from .skull import REGIONS_DEFAULT, skull_clamp, slide_over_bone, tissue_thickness
+from .sphincters import is_sphincter
 from .surface import skin_surface
 from .unfold import flipped_faces
 from .unfold import unfold as unfold_folds
@@ -144,6 +145,10 @@ class ExpressionModel:
         self.pivots_ = frame.to_canonical(rig.skeleton.heads)
         W = np.asarray(rig.weights, dtype=np.float64)
         mj = self.joints_ = muscles_from_rig(rig).transformed(frame.to_canonical, 1.0 / float(frame.size))
+        for t in sorted(set(mj.types) & set(types)):
+            if not is_sphincter(types[t]) and not {"wire", "dropoff"} <= set(types[t]):
+                raise AutobonesError(f"expression definitions: muscle type {t!r} needs 'wire' and 'dropoff' "
+                                     "(a linear muscle) or a 'sphincter' entry")
         self.muscle_names_ = list(mj.names)
         L = {kk: frame.to_canonical(np.asarray(v, dtype=np.float64).reshape(1, 3))[0]
              for kk, v in inputs.landmarks.items()}
