@@ -120,8 +120,7 @@ def transfer_picture(rig, size=420):
     jaw = rig.weights[:, rig.skeleton.names.index("jaw")]
     skin = np.array([0.85, 0.85, 0.85]) * (1 - jaw[:, None]) + np.array([0.15, 0.75, 0.2]) * jaw[:, None]
     bones = np.stack([rig.frame.to_canonical(rig.skeleton.heads), rig.frame.to_canonical(rig.skeleton.tails)], 1)
-    muscles = np.array([[m["origin"], m["insertion"]] for m in rig.muscles]).reshape(-1, 3)
-    muscles = rig.frame.to_canonical(muscles).reshape(-1, 2, 3)
+    muscles = render.muscle_segments(rig.muscles, rig.frame.to_canonical)   # lines, and rings for the sphincters
     top = render.render_views(C, rig.faces, vertex_colors=skin, views=views, size=(size, size),
                               segments=np.concatenate([bones, muscles]), points=bones[:, 0],
                               point_color=(20, 40, 200), segment_color=(200, 30, 30))

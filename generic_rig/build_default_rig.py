@@ -52,12 +52,12 @@ def jaw_colors(w):
 
 
 def render(rig, path):
-    from autobones.render import render_views, save_png
+    from autobones.render import muscle_segments, render_views, save_png
 
     V, F = rig.vertices, rig.faces
     segs = [rig.skeleton.segments]
     cols = [np.tile(BONE_COLOR, (len(rig.skeleton), 1))]
-    M = np.array([[m["origin"], m["insertion"]] for m in rig.muscles])
+    M = muscle_segments(rig.muscles)            # the default head's own frame is canonical
     segs.append(M)
     cols.append(np.tile(MUSCLE_COLOR, (len(M), 1)))
     S = np.concatenate(segs)

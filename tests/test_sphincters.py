@@ -12,7 +12,8 @@ from autobones.errors import AutobonesError
 from autobones.expressions.definitions import load_expressions, muscle_types
 from autobones.expressions.model import ExpressionModel
 from autobones.expressions.sphincters import sphincter_field
-from autobones.geometry.ring import ring_frame, ring_profile
+from autobones.geometry.ring import ring_frame, ring_outline, ring_profile
+from autobones.render import muscle_segments
 
 from shared_data import ROOT
 
@@ -65,6 +66,25 @@ def test_ring_halves_sum_to_the_whole_and_the_hole_is_empty():
     assert gl[P[:, 0] < -0.15 * half].max() == 0.0      # each half stays on its side of the blend
     rho, gh = ring_profile(P, c, al, half, sym, hole=(0.2, 0.4))
     assert gh[rho < 0.2].max() == 0.0 and np.allclose(gh[rho > 0.4], whole[rho > 0.4])
+
+
+def test_ring_outline_lies_on_the_ellipse_and_pictures_each_muscle():
+    c = np.array([0.0, 0.1, 0.2])
+    lateral = c + [0.5, 0.0, -0.1]
+    axes, half = ring_frame(c, lateral)
+    P = ring_outline(c, lateral, REACH, radius=0.7, count=40)
+    rho, _ = ring_profile(P, c, axes, half, REACH)
+    assert P.shape == (40, 3) and np.allclose(rho, 0.7) and np.allclose((P - c) @ axes[2], 0.0)
+    arc = ring_outline(c, lateral, REACH, count=9, arc=(-0.5 * np.pi, 0.5 * np.pi))
+    assert np.all((arc - c) @ axes[0] >= -1e-12) and np.allclose(arc[[0, -1]] @ axes[0], c @ axes[0])
+    linear = {"origin": [0.0, 0.0, 0.0], "insertion": [0.1, 0.2, 0.3]}
+    ring = {"kind": "sphincter", "origin": list(c), "insertion": list(lateral), "reach": REACH}
+    half_ring = {**ring, "split": 0.3}
+    S = muscle_segments([linear, ring, half_ring])
+    assert S.shape == (1 + 32 + 16, 2, 3)
+    assert np.allclose(S[0], [linear["origin"], linear["insertion"]])
+    assert np.allclose(S[1:33, 1], np.roll(S[1:33, 0], -1, axis=0))      # the ring closes
+    assert np.all(S[33:, :, :] @ axes[0] - c @ axes[0] >= -1e-12)                 # the half stays lateral
 
 
 def test_sphincter_field_pulls_toward_the_centre_and_pushes_out():

@@ -99,3 +99,23 @@ def ring_profile(P, centre, axes, half, reach, core=0.3, hole=None, split=None, 
         g = g * np.clip(0.5 + x / float(split), 0.0, 1.0)
     g = g * (z > -float(depth) * max(float(reach[q]) for q in QUADRANTS))
     return rho, g
+
+
+def ring_outline(centre, lateral, reach, radius=0.7, count=32, arc=None, up=(0.0, 1.0, 0.0), front=(0.0, 0.0, 1.0)):
+    """Points on the ring's ellipse at elliptical radius ``radius``, in the ring's plane (for pictures).
+
+    ``centre``, ``lateral`` (3,) and ``up``, ``front`` as for :func:`ring_frame`; ``reach`` as for
+    :func:`ring_profile`. ``arc`` (start, stop) in radians from the lateral side toward ``up``: an
+    open arc of ``count`` points, ends included (``(-pi/2, pi/2)``: the lateral half); default the
+    whole ellipse, ``count`` points going round once from the lateral side. Returns (count, 3)
+    float, same frame and unit as the points.
+    """
+    axes, half = ring_frame(centre, lateral, up, front)
+    if arc is None:
+        t = np.linspace(0.0, 2.0 * np.pi, int(count), endpoint=False)
+    else:
+        t = np.linspace(float(arc[0]), float(arc[1]), int(count))
+    c, s = np.cos(t), np.sin(t)
+    x = np.where(c >= 0, float(reach["lateral"]), float(reach["medial"])) * c
+    y = np.where(s >= 0, float(reach["above"]), float(reach["below"])) * s
+    return np.asarray(centre, dtype=np.float64) + float(radius) * half * (x[:, None] * axes[0] + y[:, None] * axes[1])

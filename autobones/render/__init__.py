@@ -9,7 +9,8 @@ Modules: :mod:`~autobones.render.camera` (orthographic cameras and the pixel con
 from .camera import Camera, look_at, orthographic_camera
 from .draw import draw_points, draw_segments, encode_png, save_png
 from .raster import RenderBuffers, rasterize, shade, surface_points
-from .views import VIEWS, render_views
+from .views import VIEWS, muscle_segments, render_views
 
 __all__ = ["Camera", "RenderBuffers", "VIEWS", "draw_points", "draw_segments", "encode_png", "look_at",
-           "orthographic_camera", "rasterize", "render_views", "save_png", "shade", "surface_points"]
+           "muscle_segments", "orthographic_camera", "rasterize", "render_views", "save_png", "shade",
+           "surface_points"]

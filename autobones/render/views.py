@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import AutobonesError
+from ..geometry.ring import ring_outline
 from ..geometry.validate import mesh_arrays
 from .camera import image_size, orthographic_camera, unit_vector
 from .draw import draw_points, draw_segments
@@ -105,3 +106,28 @@ def render_views(V, F, vertex_colors=None, views=("front", "side"), size=(512, 5
             img = draw_points(img, p, labels=point_labels, color=point_color, filled=visible)
         panels.append(img)
     return np.concatenate(panels, axis=1)
+
+
+def muscle_segments(muscles, to_frame=None):
+    """Segments (s, 2, 3) that picture a rig's muscles: a linear muscle's origin -> insertion, a
+    sphincter's ring (``kind`` "sphincter": its ellipse at elliptical radius 0.7, 32 segments; the
+    lateral half of it, 16 segments, for one half of a ring across the midline).
+
+    ``muscles``: the rig's muscle dicts (``origin``, ``insertion``; a sphincter's ``reach`` too);
+    ``to_frame``: (k, 3) -> (k, 3) applied to the ends first (e.g. ``rig.frame.to_canonical``) so
+    that the points are canonical (+Y up, +Z front), which the rings' frame assumes.
+    """
+    move = to_frame or (lambda P: P)
+    out = []
+    for m in muscles:
+        ends = move(np.array([m["origin"], m["insertion"]], dtype=np.float64))
+        if m.get("kind") == "sphincter" and isinstance(m.get("reach"), dict):
+            if m.get("split") is None:                     # a closed ring
+                P = ring_outline(ends[0], ends[1], m["reach"])
+                out.append(np.stack([P, np.roll(P, -1, axis=0)], axis=1))
+            else:                                          # one half of a ring across the midline
+                P = ring_outline(ends[0], ends[1], m["reach"], count=17, arc=(-0.5 * np.pi, 0.5 * np.pi))
+                out.append(np.stack([P[:-1], P[1:]], axis=1))
+        else:
+            out.append(ends[None])
+    return np.concatenate(out) if out else np.zeros((0, 2, 3))
