@@ -110,6 +110,12 @@ EXPRESSION_HEADS = {  # name: (mesh or None for the default head, landmark file)
     "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
 }
 
+def landmark_path(rel):
+    """A landmark file named in the tables above: in the project (``tests/``, ``generic_rig/``) or under
+    ../shared/data."""
+    return HERE.parent / rel if rel.startswith(("tests/", "generic_rig/")) else DATA / rel
+
+
 REGION_COLOURS = np.array([colorsys.hsv_to_rgb((0.07 + i * 0.618034) % 1.0, 0.45, 0.95) for i in range(16)])
 
 
@@ -189,7 +195,7 @@ def expression_picture(name, out, size=420):
     from autobones.expressions.model import ExpressionModel
 
     mesh, marks = EXPRESSION_HEADS[name]
-    marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+    marks = landmark_path(marks)
     rig = autobones.transfer(None if mesh is None else DATA / mesh, marks, arkit=True)
     model = ExpressionModel().fit(rig)
     emotions = ["neutral"] + list(model.expressions)
@@ -248,7 +254,7 @@ def sphincters_picture(out, width=1800):
     rows = []
     for name in SPHINCTER_HEADS:
         mesh, marks = EXPRESSION_HEADS[name]
-        marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+        marks = landmark_path(marks)
         rig = autobones.transfer(None if mesh is None else DATA / mesh, marks)
         model = ExpressionModel().fit(rig)
         poses = [rig.vertices] + [model.pose(au={a: 1.0}) for a in SPHINCTER_AUS]
@@ -257,15 +263,8 @@ def sphincters_picture(out, width=1800):
         rows.append(img)
         print(f"{name}: largest motion {top:.3g} mesh units")
     path = Path(out) / "expressions_sphincters.png"
-    render.save_png(path, np.concatenate([_pad_width(r, width) for r in rows], axis=0))
+    render.save_png(path, np.concatenate(rows, axis=0))             # motion_strip makes each row ``width`` wide
     print(f"{path}: {', '.join(SPHINCTER_HEADS)}; AU{', AU'.join(map(str, SPHINCTER_AUS))}")
-
-
-def _pad_width(img, width):
-    """``img`` padded with white on the right to ``width`` pixels (strips of heads of other shapes)."""
-    if img.shape[1] >= width:
-        return img[:, :width]
-    return np.concatenate([img, np.full((img.shape[0], width - img.shape[1], 3), 255, img.dtype)], axis=1)
 
 
 JAW_HEADS = ("goat", "robot")  # keys of TRANSFERS
@@ -386,7 +385,7 @@ ARKIT_PICTURES = ["arkit_shapes", "arkit_capture"]
 def arkit_rig(label):
     """The head ``label`` of :data:`ARKIT_HEADS` transferred with its ARKit shapes."""
     mesh, marks = ARKIT_HEADS[label]
-    marks = HERE.parent / marks if marks.startswith(("tests/", "generic_rig/")) else DATA / marks
+    marks = landmark_path(marks)
     return autobones.transfer(DATA / mesh, marks, arkit=True)
 
 
@@ -571,7 +570,7 @@ def main(argv=None):
             continue
         if name.startswith("transfer_"):
             mesh, marks = TRANSFERS[name[len("transfer_"):]]
-            marks = HERE.parent / marks if marks.startswith("tests/") else DATA / marks
+            marks = landmark_path(marks)
             rig = autobones.transfer(DATA / mesh, marks)
             path = Path(args.out) / f"{name}.png"
             render.save_png(path, transfer_picture(rig))

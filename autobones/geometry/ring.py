@@ -89,8 +89,7 @@ def ring_profile(P, centre, axes, half, reach, core=0.3, hole=None, split=None, 
         raise AutobonesError(f"sphincter: reach needs positive {', '.join(missing)}")
     X = (np.asarray(P, dtype=np.float64) - centre) @ np.asarray(axes).T / half
     x, y, z = X[:, 0], X[:, 1], X[:, 2]
-    ax = np.where(x >= 0, float(reach["lateral"]), float(reach["medial"]))
-    ay = np.where(y >= 0, float(reach["above"]), float(reach["below"]))
+    ax, ay = _semi_axes(x, y, reach)
     rho = np.sqrt((x / ax) ** 2 + (y / ay) ** 2)
     g = 0.5 * (1.0 + np.cos(np.pi * np.clip((rho - core) / (1.0 - core), 0.0, 1.0)))
     if hole is not None:
@@ -116,6 +115,12 @@ def ring_outline(centre, lateral, reach, radius=0.7, count=32, arc=None, up=(0.0
     else:
         t = np.linspace(float(arc[0]), float(arc[1]), int(count))
     c, s = np.cos(t), np.sin(t)
-    x = np.where(c >= 0, float(reach["lateral"]), float(reach["medial"])) * c
-    y = np.where(s >= 0, float(reach["above"]), float(reach["below"])) * s
+    ax, ay = _semi_axes(c, s, reach)
+    x, y = ax * c, ay * s
     return np.asarray(centre, dtype=np.float64) + float(radius) * half * (x[:, None] * axes[0] + y[:, None] * axes[1])
+
+
+def _semi_axes(x, y, reach):
+    """The semi-axes (in ``half`` units) of the quadrant each ring coordinate (x, y) lies in."""
+    return (np.where(x >= 0, float(reach["lateral"]), float(reach["medial"])),
+            np.where(y >= 0, float(reach["above"]), float(reach["below"])))

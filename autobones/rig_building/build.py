@@ -447,11 +447,7 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
     r = np.clip(perp / width, 0.0, 1.0)
     across = np.where(perp < width, 0.5 * (np.cos(np.pi * r ** float(m.get("falloff", 1.8))) + 1.0), 0.0)
     infl = np.clip(along * across, 0.0, 1.0)
-    out = {k: v for k, v in m.items() if k not in ("origin", "insertion")}
-    out.update({"origin_definition": dict(m["origin"]), "insertion_definition": dict(m["insertion"]),
-                "origin": origin, "insertion": ins, "width_canonical": width,
-                "origin_depth_canonical": depth, "inside": bool(wn(origin)[0] > 0.5)})
-    return out, infl.astype(np.float64)
+    return _placed(m, origin, ins, width, depth, bool(wn(origin)[0] > 0.5)), infl.astype(np.float64)
 
 
 def _sphincter(m, centre, lateral, Vc):
@@ -467,8 +463,15 @@ def _sphincter(m, centre, lateral, Vc):
         raise AutobonesError(f"muscle definition {m['name']}: {exc}") from None
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
         raise AutobonesError(f"muscle definition {m['name']}: incomplete sphincter ({exc!r})") from None
+    return _placed(m, centre, lateral, half, 0.0, False), infl
+
+
+def _placed(m, origin, insertion, width, depth, inside):
+    """The muscle definition ``m`` as placed on a head: its other keys, the landmark combinations
+    it was placed by, and the canonical ``origin``, ``insertion``, ``width_canonical``,
+    ``origin_depth_canonical`` and ``inside`` (its origin inside the head)."""
     out = {k: v for k, v in m.items() if k not in ("origin", "insertion")}
     out.update({"origin_definition": dict(m["origin"]), "insertion_definition": dict(m["insertion"]),
-                "origin": centre, "insertion": lateral, "width_canonical": half,
-                "origin_depth_canonical": 0.0, "inside": False})
-    return out, infl
+                "origin": origin, "insertion": insertion, "width_canonical": width,
+                "origin_depth_canonical": depth, "inside": inside})
+    return out
