@@ -209,6 +209,31 @@ def test_api_serves_the_rig_facts_full_weights_and_thumbnails(batch_dir, batch_s
     assert _snapshot(batch_dir) == before  # read-only: no thumbnail or anything else written into the folder
 
 
+def test_rig_facts_picture_a_sphincter_as_its_ring(rig_dir):
+    from autobones.view.site import rig_facts
+
+    facts = rig_facts(str(rig_dir), "robot.glb")
+    meta = json.loads((rig_dir / "robot.rig.json").read_text())
+    size = meta["frame"]["head_size"]
+    rings = [m for m in facts["muscles"] if m["kind"] == "sphincter"]
+    assert {m["type"] for m in rings} >= {"orbicularis_oris", "orbicularis_oculi"}
+    for m in facts["muscles"]:
+        S = np.array(m["segments"])
+        if m["kind"] != "sphincter":
+            assert S.shape == (1, 2, 3) and np.allclose(S[0], [m["origin"], m["insertion"]])
+            continue
+        # a chain of segments (closed, or half a ring for one side of the mouth) round the centre, about
+        # as far out as the corner: the ring, not a line from the centre to the corner
+        assert S.shape[0] >= 16 and np.allclose(S[1:, 0], S[:-1, 1])
+        r = np.linalg.norm(S[:, 0] - np.array(m["origin"]), axis=1)
+        corner = np.linalg.norm(np.subtract(m["insertion"], m["origin"]))
+        assert r.min() > 0.3 * corner and r.max() < 4 * corner and corner > 0.01 * size
+    # a sidecar whose frame is unreadable still lists every muscle, each by its two ends
+    from autobones.view.site import _muscles
+    plain = _muscles({"muscles": meta["muscles"], "frame": None})
+    assert [len(m["segments"]) for m in plain] == [1] * len(meta["muscles"])
+
+
 def test_thumbnails_are_drawn_once_per_file_version(batch_dir, tmp_path, monkeypatch):
     from autobones.view import thumbnails
 
@@ -442,6 +467,26 @@ def test_browser_rig_page_poses_morphs_and_colours(rig_dir, browser):
         from autobones.view.thumbnails import bone_palette
         col = np.array(page.evaluate(f"{hook}.weightColours()")).reshape(-1, 3)
         assert np.allclose(col, bone_palette(len(names))[J[np.arange(len(J)), np.argmax(Wt, axis=1)]], atol=1e-5)
+        # muscles: at rest the page draws the sidecar's segments (a sphincter as its ring); turning the head
+        # carries each ring rigidly (pairwise distances kept) with its centre's marker
+        page.click("#reset")
+        from autobones.view.site import rig_facts
+        facts = rig_facts(str(rig_dir), "robot.glb")
+        drawn = np.array(page.evaluate(f"{hook}.muscleLines()")).reshape(-1, 2, 3)
+        want = [np.array(m["segments"]) for m in facts["muscles"]]
+        assert drawn.shape[0] == sum(len(w) for w in want) > len(want)
+        assert np.abs(drawn - np.concatenate(want)).max() < 1e-5 * size
+        page.evaluate(f"{hook}.setBone('head', [10, 25, 0])")
+        turned = np.array(page.evaluate(f"{hook}.muscleLines()")).reshape(-1, 2, 3)
+        at = np.cumsum([0] + [len(w) for w in want])
+        for m, a, b in zip(facts["muscles"], at[:-1], at[1:]):
+            if m["kind"] != "sphincter":
+                continue
+            P0, P1 = drawn[a:b, 0], turned[a:b, 0]
+            assert np.abs(P1 - P0).max() > 0.01 * size
+            d0 = np.linalg.norm(P0[:, None] - P0[None], axis=2)
+            assert np.abs(np.linalg.norm(P1[:, None] - P1[None], axis=2) - d0).max() < 1e-4 * size
+        page.click("#reset")
         page.evaluate(f"{hook}.showOverlays(true)")
         page.wait_for_timeout(300)
         _not_blank(page.locator("#view canvas").screenshot())

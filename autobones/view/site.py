@@ -20,6 +20,7 @@ import numpy as np
 from ..batch.report import REPORT_FORMAT, REPORT_NAME, STATUSES
 from ..errors import AutobonesError
 from ..io.rig_files import load_rig
+from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, sidecar_paths
 
 
@@ -195,7 +196,8 @@ def rig_facts(root, rel, record=None):
     dict
         ``path``, ``source``, ``command``, ``vertices``, ``bones`` (name, parent, head, tail),
         ``frame`` (up, front, rotation (3, 3) rows = canonical +X, +Y, +Z in the input frame, origin,
-        head_size, symmetry_error), ``muscles`` (name, type, origin, insertion), ``landmarks``
+        head_size, symmetry_error), ``muscles`` (name, type, kind, origin, insertion, ``segments``:
+        (s, 2, 3) rest-pose line segments picturing it, the file's frame), ``landmarks``
         ({name: [x, y, z]}), ``landmarks_source``, ``morph_targets`` (names and labels), ``options``,
         ``status``, ``seconds``, ``timings`` (seconds per stage; only batch records keep them),
         ``warnings`` (:func:`rig_warnings`).
@@ -214,8 +216,7 @@ def rig_facts(root, rel, record=None):
         "bones": [{"name": b["name"], "parent": b.get("parent"), "head": b.get("head"), "tail": b.get("tail")}
                   for b in meta.get("bones") or []],
         "frame": meta.get("frame"),
-        "muscles": [{"name": m.get("name"), "type": m.get("type"), "origin": m.get("origin"),
-                     "insertion": m.get("insertion")} for m in meta.get("muscles") or []],
+        "muscles": _muscles(meta),
         "landmarks": meta.get("landmarks") or {},
         "landmarks_source": opts.get("landmarks_source"),
         "reliable_fraction": meta.get("reliable_fraction"),
@@ -227,6 +228,32 @@ def rig_facts(root, rel, record=None):
         "timings": record.get("timings") or {},
         "warnings": rig_warnings(meta, record),
     }
+
+
+def _muscles(meta):
+    """The sidecar's muscles for the page: name, type, kind, origin, insertion and ``segments``, the
+    rest-pose lines that picture each (:func:`autobones.render.muscle_segments`: a linear muscle's
+    origin -> insertion, a sphincter's ring) in the file's frame. A muscle whose ring cannot be drawn
+    from the sidecar (no frame, a malformed reach) is pictured by its two ends, as before rings."""
+    from ..render import muscle_segments
+
+    try:
+        frame = Frame.from_dict(meta.get("frame"))
+    except (KeyError, TypeError, ValueError):
+        frame = None
+    out = []
+    for m in meta.get("muscles") or []:
+        ends = [m.get("origin"), m.get("insertion")]
+        seg = [ends] if all(e is not None for e in ends) else []
+        if frame is not None and m.get("kind") == "sphincter" and seg:
+            try:
+                S = muscle_segments([m], to_frame=frame.to_canonical)
+                seg = frame.from_canonical(S.reshape(-1, 3)).reshape(-1, 2, 3).tolist()
+            except (AutobonesError, KeyError, TypeError, ValueError):
+                pass
+        out.append({"name": m.get("name"), "type": m.get("type"), "kind": m.get("kind", "linear"),
+                    "origin": m.get("origin"), "insertion": m.get("insertion"), "segments": seg})
+    return out
 
 
 def batch_listing(site):

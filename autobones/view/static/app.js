@@ -174,30 +174,43 @@ async function showRig(rel, fromBatch) {
     redraw();
   }
 
-  // muscles follow their marker nodes (children of bones); landmarks are the sidecar's rest positions
+  // muscles follow their marker nodes (children of bones); landmarks are the sidecar's rest positions.
+  // A linear muscle is its origin -> insertion; a sphincter is its ring (the sidecar's rest segments),
+  // carried rigidly by its centre's marker (the ring's origin)
   const nodeObjects = await Promise.all((json.nodes || []).map((_, i) => gltf.parser.getDependency('node', i)));
   const byName = new Map((json.nodes || []).map((nd, i) => [nd.name, nodeObjects[i]]));
-  const muscles = (facts.muscles || []).map((m) => ({
-    name: m.name, o: byName.get(`muscle/${m.name}/origin`), i: byName.get(`muscle/${m.name}/insertion`),
-    origin: m.origin, insertion: m.insertion,
-  }));
+  scene.updateMatrixWorld(true);
+  const muscles = (facts.muscles || []).map((m) => {
+    const o = byName.get(`muscle/${m.name}/origin`);
+    const ring = m.kind === 'sphincter' && (m.segments || []).length ? m.segments.flat() : null;
+    return { name: m.name, o, i: byName.get(`muscle/${m.name}/insertion`), origin: m.origin, insertion: m.insertion,
+             ring, restInv: ring && o ? o.matrixWorld.clone().invert() : null };
+  });
+  const nPoints = muscles.reduce((k, m) => k + (m.ring ? m.ring.length : 2), 0);
   const muscleGeom = new THREE.BufferGeometry();
-  muscleGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(muscles.length * 6), 3));
+  muscleGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(nPoints * 3), 3));
   const muscleLines = new THREE.LineSegments(muscleGeom, new THREE.LineBasicMaterial({ color: 0xc2185b, depthTest: false }));
   muscleLines.renderOrder = 2;
   muscleLines.frustumCulled = false;
   muscleLines.visible = false;
   scene.add(muscleLines);
   const tmp = new THREE.Vector3();
+  const moved = new THREE.Matrix4();
   function updateMuscles() {
     if (!muscleLines.visible) return;
     const p = muscleGeom.attributes.position.array;
-    muscles.forEach((m, k) => {
+    let k = 0;
+    for (const m of muscles) {
+      if (m.ring) {
+        if (m.restInv) moved.multiplyMatrices(m.o.matrixWorld, m.restInv); else moved.identity();
+        for (const q of m.ring) { tmp.set(q[0], q[1], q[2]).applyMatrix4(moved); p.set([tmp.x, tmp.y, tmp.z], 3 * k++); }
+        continue;
+      }
       if (m.o) m.o.getWorldPosition(tmp); else tmp.set(...(m.origin || [0, 0, 0]));
-      p.set([tmp.x, tmp.y, tmp.z], 6 * k);
+      p.set([tmp.x, tmp.y, tmp.z], 3 * k++);
       if (m.i) m.i.getWorldPosition(tmp); else tmp.set(...(m.insertion || [0, 0, 0]));
-      p.set([tmp.x, tmp.y, tmp.z], 6 * k + 3);
-    });
+      p.set([tmp.x, tmp.y, tmp.z], 3 * k++);
+    }
     muscleGeom.attributes.position.needsUpdate = true;
   }
   const marks = new THREE.Group();
@@ -389,6 +402,11 @@ async function showRig(rel, fromBatch) {
       mesh.morphTargetInfluences[dict[name]] = +v; redraw();
     },
     colourBy: (name, source = 'glb') => colourBy(name, source),
+    muscleLines() {  // the drawn muscle segments, flat [x0, y0, z0, x1, ...], two points a segment
+      const was = muscleLines.visible;
+      muscleLines.visible = true; scene.updateMatrixWorld(true); updateMuscles(); muscleLines.visible = was;
+      return Array.from(muscleGeom.attributes.position.array);
+    },
     weightColours: () => Array.from(colors),
     positions() {  // skinned and morphed vertices, the file's frame and units, flat [x0, y0, z0, x1, ...]
       scene.updateMatrixWorld(true);
