@@ -3,9 +3,10 @@
     python gallery/make_view_shots.py                  # both, made from scratch in a temporary folder
     python gallery/make_view_shots.py --only rig       # or: --only batch
 
-``view_rig.png``: ICT identity 002 transferred with its 18 AU morph targets, shown by ``autobones view
+``view_rig.png``: ICT identity 002 transferred with its AU morph targets (one per AU), shown by ``autobones view
 head.glb``: the skin coloured by the jaw's weight (the full matrix of the npz), the jaw opened 12 degrees
-with its slider, AU12 (lip corner puller) at 0.8 and AU6 at 0.5, landmarks (red) and muscles (pink) on.
+with its slider, AU12 (lip corner puller) at 0.8 and AU6 at 0.5, landmarks (red) and muscles (pink: lines,
+the sphincters as rings) on.
 ``view_batch.png``: ``autobones batch`` (place, sparse) on seven shared heads and one broken file, shown by
 ``autobones view rigs/``: thumbnails coloured by each vertex's dominant bone, status per file, the failed
 file's one-line reason.
