@@ -10,6 +10,7 @@ Run by hand, not by the tests::
     python benchmarks/expressions.py --sweeps 60  # more rigid block-descent sweeps
     python benchmarks/expressions.py --part ict57 --refine 0   # ICT's AU shapes, remeshed transfer (~20 min)
     python benchmarks/expressions.py --part ict57 --shapes jawOpen eyeBlink_L --identities identity003
+    python benchmarks/expressions.py --part ceiling   # what any contractions of the fields could explain (~8 min)
 
 Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
 landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
@@ -707,14 +708,69 @@ def ict57_benchmark(source="identity002", targets=("identity000", "identity001")
     return res
 
 
+def ceiling_benchmark(source="identity002", shapes=None):
+    """How far the rig's muscle fields can go at all: for every mapped ICT shape, stage 1 of
+    ``fit_rig`` (grid over jaw and lids, linear surrogate, no refinement) on ``source``, once with
+    the contractions in their bounds (what the benchmark fits) and once with the contractions free
+    in sign and size (any linear combination of the fields: a ceiling no contraction values, bounds
+    or refinement can pass). Scored on the surrogate ``linear_pose`` itself, so the two columns
+    differ only by the bounds. Prints the table; returns the per-shape scores."""
+    t_all = time.perf_counter()
+    rows = ict57_shapes()
+    if shapes:
+        rows = [r for r in rows if r[0] in shapes]
+    z = np.load(ICT / "ict_facekit_shapes.npz")
+    E = {n: z[f"expression/{n}"].astype(np.float64) for n, _ in rows}
+    rig_s, m_s, _, masks_s = rig_head(source, str(ICT / f"{source}.obj"), str(ICT / f"{source}.landmarks.json"))
+    Vs = rig_s.vertices
+    where = "skin"
+    sel = masks_s[where]
+    bounded = SharedSolves(m_s, Vs, E, {where: sel})
+    free = SharedSolves(m_s, Vs, E, {where: sel})
+    free.lo, free.hi = np.full(len(free.lo), -np.inf), np.full(len(free.hi), np.inf)
+    free.cache = bounded.cache                              # same QR per grid point; only the bounds differ
+
+    def surrogate(c, jaw, lids):
+        A, b = m_s.linear_pose(jaw, lids)
+        return b + np.tensordot(c, A, axes=1)
+
+    res = {}
+    for n, au in rows:
+        X = Vs + E[n]
+        r = {"au": au}
+        for key, sh in (("bounded", bounded), ("free", free)):
+            c, jaw, lids, _ = fit_rig(m_s, X, sel, refine=0, solve=sh.solver(n, where))
+            r[key] = explained(surrogate(c, jaw, lids), X, Vs, sel)
+            r[key + " range"] = (float(c.min()), float(c.max()))
+            r[key + " pushes"] = [f"{m_s.joints_.names[i]} {c[i]:.2f}" for i in np.argsort(c)[:3] if c[i] < -0.05]
+        res[n] = r
+        print(f"  {n} ({au}): bounded {fmt(r['bounded'])}, free {fmt(r['free'])} "
+              f"(free contractions {r['free range'][0]:.2f} .. {r['free range'][1]:.2f}; most negative: "
+              f"{', '.join(r['free pushes']) or 'none'})", flush=True)
+    lines = ["| shape | AU | bounded (fitted) | free (ceiling) | free contractions min .. max |", "|---|---|---|---|---|"]
+    for n, r in res.items():
+        lines.append(f"| {n} | {r['au']} | {fmt(r['bounded'])} | {fmt(r['free'])} | "
+                     f"{r['free range'][0]:.2f} .. {r['free range'][1]:.2f} |")
+    b = np.array([r["bounded"] for r in res.values()])
+    f = np.array([r["free"] for r in res.values()])
+    lines.append(f"| **mean of {len(res)}** | | {fmt(np.nanmean(b))} | {fmt(np.nanmean(f))} | |")
+    print(f"\nThe muscle fields' ceiling on {source}, skin, explained % on the linear surrogate "
+          f"({len(m_s.joints_.types)} contractions, jaw and 4 lids on fit_rig's grid):\n")
+    print("\n".join(lines))
+    print(f"\nshapes with a free ceiling >= 80 %: {int((f >= 0.8).sum())} of {len(f)}; >= 65 %: {int((f >= 0.65).sum())}")
+    print(f"ceiling: {time.perf_counter() - t_all:.1f} s; {datetime.date.today()}, {machine()}")
+    return res
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
     ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
-    ap.add_argument("--part", choices=["all", "rig", "bones", "ict57"], default="all",
+    ap.add_argument("--part", choices=["all", "rig", "bones", "ict57", "ceiling"], default="all",
                     help="rig: the full-rig fit and transfer (parts 1, 2) only; bones: bones alone (part 3) only; "
                          "ict57: every ICT shape the AU <-> ARKit table maps, transferred to remeshed identities "
-                         "(not part of 'all')")
+                         "(not part of 'all'); ceiling: what any contractions of the muscle fields could explain "
+                         "of those shapes on identity002 (not part of 'all')")
     ap.add_argument("--identities", nargs="+", default=["identity000", "identity001"],
                     help="ict57: the ICT identities the fit is transferred to (remeshed)")
     ap.add_argument("--shapes", nargs="+", help="ict57: only these ICT shapes (default: every mapped one)")
@@ -722,6 +778,9 @@ def main():
                     help="full rig: least_squares evaluations of the nonlinear refinement (0: grid + linear only)")
     args = ap.parse_args()
     sweeps = 0 if args.quick else args.sweeps
+    if args.part == "ceiling":
+        ceiling_benchmark(shapes=args.shapes)
+        return
     if args.part == "ict57":
         ict57_benchmark(targets=tuple(args.identities), refine=args.refine, shapes=args.shapes)
         return
