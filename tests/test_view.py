@@ -308,8 +308,11 @@ def test_bad_inputs_are_one_line_and_exit_2(rig_dir, tmp_path):
 
 
 def test_cli_prints_the_url_first_and_stops_cleanly_on_ctrl_c(rig_dir):
+    # Ctrl-C as at a terminal: a test run started as a background job (`pytest &`) has SIGINT ignored, which
+    # the child would inherit (and Python then installs no KeyboardInterrupt handler)
     p = subprocess.Popen(CLI + ["view", str(rig_dir / "robot.glb"), "--no-browser"], cwd=ROOT, env=_env(),
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         first = p.stdout.readline()  # flushed at once: a script can read it while the server runs
         m = re.fullmatch(r"http://127\.0\.0\.1:(\d+)/\n", first)
