@@ -174,6 +174,7 @@ def test_muscles_definitions_cover_seed_001_types():
     types = {m["type"] for m in defs}
     assert len(types) == 20 and len(defs) == 40
     assert sum(m.get("kind") == "sphincter" for m in defs) == 6     # orbicularis oris (2 parts) and oculi
+    assert sum(m.get("kind") == "sheet" for m in defs) == 2         # mentalis
     for m in defs:
         assert abs(sum(m["origin"].values()) - 1) < 1e-9 and abs(sum(m["insertion"].values()) - 1) < 1e-9
         assert set(m["origin"]) | set(m["insertion"]) <= set(NAMES)
@@ -181,15 +182,15 @@ def test_muscles_definitions_cover_seed_001_types():
 
 def test_muscles_origin_under_skin_insertion_on_skin(rig, head):
     V, F, _ = head
-    linear = [m for m in rig.muscles if m.get("kind") != "sphincter"]
-    rings = [m for m in rig.muscles if m.get("kind") == "sphincter"]
-    assert len(linear) == 34 and len(rings) == 6
+    linear = [m for m in rig.muscles if m.get("kind") not in ("sphincter", "sheet")]
+    rings = [m for m in rig.muscles if m.get("kind") in ("sphincter", "sheet")]
+    assert len(linear) == 32 and len(rings) == 8
     O = np.array([m["origin"] for m in linear])
     I = np.array([m["insertion"] for m in linear])
     assert (winding(V, F, O) > 0.5).all()
     assert surface_distance(V, F, I).max() < 1e-6
     assert (surface_distance(V, F, O) > surface_distance(V, F, I) + 0.003).all()
-    # a sphincter's centre and lateral point lie on the skin
+    # a sphincter's or sheet's centre and lateral point lie on the skin
     assert surface_distance(V, F, np.array([m[k] for m in rings for k in ("origin", "insertion")])).max() < 1e-6
     for m in rig.muscles:
         f = rig.fields["muscle/" + m["name"]]

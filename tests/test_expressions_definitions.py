@@ -53,7 +53,7 @@ def test_muscle_types_fill_the_optional_keys():
     types = muscle_types({"muscle_types": {"a": {"wire": [0.3, 1.1], "dropoff": 2.0}, "b": {"shortening": 0.3,
                                                                                             "slide": True}}})
     assert types["a"] == {"wire": [0.3, 1.1], "dropoff": 2.0, "shortening": 0.0, "slide": False, "galea": None,
-                          "sphincter": None}
+                          "sphincter": None, "sheet": None}
     assert types["b"]["shortening"] == 0.3 and types["b"]["slide"] is True
     assert set(muscle_types(DOC)) == set(DOC["muscle_types"])
 

@@ -1,7 +1,8 @@
 """Issue #16 item 2, the sphincters seed 000 lacks: orbicularis oris (its peripheral and marginal
 parts) and orbicularis oculi (its orbital part) as elliptical rings (Waters 1987), built into the
 generic rig, carried by ``transfer`` and driving AU6, AU18, AU22, AU23 and AU24 (Ekman, Friesen &
-Hager 2002). The ring's geometry first, then the model on the default head."""
+Hager 2002). Mentalis, a sheet given the same way, lifts the chin (AU17). The ring's geometry
+first, then the model on the default head."""
 import copy
 
 import numpy as np
@@ -108,6 +109,18 @@ def test_sphincter_field_pulls_toward_the_centre_and_pushes_out():
         sphincter_field(P, c, [0.4, 0, 0], g, {"shortening": 1.0, "sphincter": {"pull": "twist"}})
 
 
+def test_sheet_field_lifts_toward_the_line_as_one_patch():
+    """A sheet (mentalis): toward the level line by the distance from it, at most the half size;
+    across only with ``narrow``; forward by g squared."""
+    c = np.zeros(3)
+    P = np.array([[0.0, -0.1, 0.0], [0.3, -0.1, 0.0], [0.0, -0.6, 0.0], [0.5, -0.9, 0.0]])
+    spec = {"shortening": 0.5, "sheet": {"pull": "line", "close": 1.0, "protrude": 0.5}}
+    d = sphincter_field(P, c, [0.4, 0, 0], np.ones(4), spec)
+    assert np.allclose(d[:, 0], 0.0)                    # narrow 0 by default: nothing across
+    assert np.allclose(d[:, 1], 0.5 * np.array([0.1, 0.1, 0.4, 0.4]))  # up by the distance, at most the half size
+    assert np.allclose(d[:, 2], 0.5 * 0.5 * 0.4)        # forward: protrude x half size x g^2
+
+
 # ------------------------------------------------------------------------------ on a head
 @pytest.fixture(scope="module")
 def default():
@@ -183,6 +196,23 @@ def test_press_brings_the_lips_together_and_funnel_parts_them(default):
     assert (Fn - m.canonical_)[lips, 2].mean() > 0.01 * fu
 
 
+def test_chin_raiser_lifts_the_chin_and_pushes_the_lower_lip_up_and_out(default):
+    """AU17 (mentalis as a sheet): the chin and the lower lip rise and come forward, the chin more
+    than the lip (ICT's mouthShrugLower: 25 and 12 thousandths of a head size); the upper lip and
+    the nose stay; no wire is made for it."""
+    rig, m = default
+    L = _landmarks(rig)
+    fu = m.face_unit_
+    assert "mentalis_l" not in [w["muscle"] for w in m.wires_]
+    d = rig.frame.to_canonical(m.pose(au={17: 1.0})) - m.canonical_
+    chin = _nearest(m, 0.5 * (L["pogonion"] + L["sublabiale"]), k=6)
+    lip = _nearest(m, L["labiale_inferius"], k=6)
+    assert d[chin, 1].mean() > 0.02 * fu and d[chin, 2].mean() > 0.005 * fu
+    assert 0 < d[lip, 1].mean() < d[chin, 1].mean() and d[lip, 2].mean() > 0
+    still = _nearest(m, L["labiale_superius"], k=6).tolist() + _nearest(m, L["pronasale"], k=6).tolist()
+    assert np.abs(d[still]).max() < 0.1 * d[chin, 1].mean()
+
+
 def test_cheek_raiser_lifts_the_cheek_toward_the_eye(default):
     """AU6 (orbicularis oculi, pars orbitalis): the cheek under each eye rises, the skin beside the
     outer eye corner moves in toward it; the mouth corners barely move (it is not a smile)."""
@@ -220,6 +250,17 @@ def test_action_units_use_the_sphincters_and_old_rigs_still_pose(default):
     for nm in m_old.muscle_names_:
         a, b = m_old.muscle_basis_[m_old.muscle_names_.index(nm)], m.muscle_basis_[m.muscle_names_.index(nm)]
         assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max(), nm
+
+
+def test_a_rig_built_with_another_kind_of_mentalis_is_one_clear_error(default):
+    """A rig whose mentalis was built as a linear muscle (before it became a sheet) posed with today's
+    definitions: one clear error naming the muscle, not a wire field read as a patch."""
+    rig, _ = default
+    old = copy.copy(rig)
+    old.muscles = [{k: v for k, v in mm.items() if k != "kind"} if mm["type"] == "mentalis" else mm
+                   for mm in rig.muscles]
+    with pytest.raises(AutobonesError, match="mentalis_l.*linear muscle in this rig.*sheet"):
+        ExpressionModel().fit(old)
 
 
 def test_an_incomplete_sphincter_definition_is_one_clear_error():

@@ -58,7 +58,7 @@ MODEL_REQUIRED = {
 }
 
 # fallbacks of the optional keys of a muscle type (``shortening`` 0: the type does not move)
-MUSCLE_TYPE_DEFAULTS = {"shortening": 0.0, "slide": False, "galea": None, "sphincter": None}
+MUSCLE_TYPE_DEFAULTS = {"shortening": 0.0, "slide": False, "galea": None, "sphincter": None, "sheet": None}
 
 
 def load_expressions(path=None):

@@ -84,6 +84,23 @@ def face_unit(landmarks, eyes):
                          "to measure the face by")
 
 
+def _check_muscle_kinds(muscles, types):
+    """One clear error when a rig's muscle was built as one kind (its record's ``kind``: linear,
+    "sphincter" or "sheet") and the definitions move its type as another (a rig transferred before
+    mentalis became a sheet, posed with today's definitions): its field would be read as the wrong
+    shape. The rig's own sidecar definitions always match it."""
+    for m in muscles:
+        t = types.get(m.get("type"))
+        if t is None:
+            continue
+        built = m.get("kind", "linear")
+        moved = "sheet" if t.get("sheet") is not None else "sphincter" if is_sphincter(t) else "linear"
+        if built != moved:
+            raise AutobonesError(f"muscle {m.get('name')!r} is a {built} muscle in this rig but the expression "
+                                 f"definitions move its type {m.get('type')!r} as a {moved}: pose it with the "
+                                 "definitions saved with the rig, or transfer the head again")
+
+
 class ExpressionModel:
     """The skin/muscle model of Bibliowicz 2005 with FACS action units, built on one transferred rig.
 
@@ -148,7 +165,8 @@ class ExpressionModel:
         for t in sorted(set(mj.types) & set(types)):
             if not is_sphincter(types[t]) and not {"wire", "dropoff"} <= set(types[t]):
                 raise AutobonesError(f"expression definitions: muscle type {t!r} needs 'wire' and 'dropoff' "
-                                     "(a linear muscle) or a 'sphincter' entry")
+                                     "(a linear muscle), or a 'sphincter' or 'sheet' entry")
+        _check_muscle_kinds(rig.muscles, types)
         self.muscle_names_ = list(mj.names)
         L = {kk: frame.to_canonical(np.asarray(v, dtype=np.float64).reshape(1, 3))[0]
              for kk, v in inputs.landmarks.items()}

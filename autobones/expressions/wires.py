@@ -24,7 +24,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import AutobonesError
 from ..geometry.laplacian import factor_spd
-from .sphincters import is_sphincter, sphincter_field
+from .sphincters import is_sheet, is_sphincter, sphincter_field
 
 
 def dropoff(x):
@@ -319,7 +319,7 @@ def muscle_basis(V, skin, joints, influence, types, mouth, fu, params, surface):
     Arguments as for :func:`muscle_wires`, plus ``surface`` (SkinSurface). Returns the fields
     (k, n, 3) float (canonical, head sizes per unit contraction) and the wires.
     """
-    # sphincters have no wire and no line to pull a neighbour's locators along: their own field
+    # sphincters and sheets have no wire and no line to pull a neighbour's locators along: their own field
     sph = np.array([is_sphincter(types.get(t)) for t in joints.types], dtype=bool)
     G, coverage, wires = muscle_wires(V, skin, joints, np.where(sph[:, None], 0.0, influence), types, mouth, fu,
                                       params)
@@ -331,7 +331,9 @@ def muscle_basis(V, skin, joints, influence, types, mouth, fu, params, surface):
         # muscles whose wire pulls one lip are smoothed with the mouth line cut, the corner
         # muscles (wires on both lips) without it
         sides = {w["muscle"]: w["side"] for w in wires}
-        one_lip = np.array([sides.get(nm, "both") != "both" for nm in joints.names])
+        # a sheet (mentalis) lifts the lower lip against the upper one: cut at the mouth line too
+        one_lip = np.array([sides.get(nm, "both") != "both" or is_sheet(types.get(t))
+                            for nm, t in zip(joints.names, joints.types)])
         G = smooth_muscle_fields(G, one_lip, surface, mouth, t_s)
     if bool(params["normalise_overlaps"]):
         G *= (1.0 / np.maximum(coverage, 1.0))[None, :, None]

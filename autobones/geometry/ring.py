@@ -6,7 +6,9 @@ muscle model). Its frame is set by two points, the centre on the skin and a late
 skin (the mouth corner, the outer eye corner): ``x`` runs from the centre toward the lateral point
 (across the face, the head's up axis removed), ``y`` up, ``z`` out of the face. The ellipse's
 semi-axes are given per quadrant in multiples of the centre -> lateral distance, so one definition
-fits any head.
+fits any head. The same ellipse bounds a *sheet* muscle (``kind`` "sheet": mentalis, which lifts the
+chin's soft tissue as one patch against the lower lip): a patch of skin with a centre and a lateral
+point, moved as one piece rather than drawn toward its centre.
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ import numpy as np
 from ..errors import AutobonesError
 
 QUADRANTS = ("lateral", "medial", "above", "below")
+RING_KINDS = ("sphincter", "sheet")   # muscle kinds given by an ellipse on the skin (centre, lateral point, reach)
 
 
 def ring_frame(centre, lateral, up=(0.0, 1.0, 0.0), front=(0.0, 0.0, 1.0)):

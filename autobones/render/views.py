@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import AutobonesError
-from ..geometry.ring import ring_outline
+from ..geometry.ring import RING_KINDS, ring_outline
 from ..geometry.validate import mesh_arrays
 from .camera import image_size, orthographic_camera, unit_vector
 from .draw import draw_points, draw_segments
@@ -110,8 +110,8 @@ def render_views(V, F, vertex_colors=None, views=("front", "side"), size=(512, 5
 
 def muscle_segments(muscles, to_frame=None):
     """Segments (s, 2, 3) that picture a rig's muscles: a linear muscle's origin -> insertion, a
-    sphincter's ring (``kind`` "sphincter": its ellipse at elliptical radius 0.7, 32 segments; the
-    lateral half of it, 16 segments, for one half of a ring across the midline).
+    sphincter's ring or a sheet's outline (``kind`` "sphincter" or "sheet": its ellipse at elliptical
+    radius 0.7, 32 segments; the lateral half of it, 16 segments, for one half across the midline).
 
     ``muscles``: the rig's muscle dicts (``origin``, ``insertion``; a sphincter's ``reach`` too);
     ``to_frame``: (k, 3) -> (k, 3) applied to the ends first (e.g. ``rig.frame.to_canonical``) so
@@ -121,7 +121,7 @@ def muscle_segments(muscles, to_frame=None):
     out = []
     for m in muscles:
         ends = move(np.array([m["origin"], m["insertion"]], dtype=np.float64))
-        if m.get("kind") == "sphincter" and isinstance(m.get("reach"), dict):
+        if m.get("kind") in RING_KINDS and isinstance(m.get("reach"), dict):
             if m.get("split") is None:                     # a closed ring
                 P = ring_outline(ends[0], ends[1], m["reach"])
                 out.append(np.stack([P, np.roll(P, -1, axis=0)], axis=1))

@@ -7,7 +7,8 @@ same definitions work on the default head and on any other landmarked head.
 Muscles follow Lee, Terzopoulos & Waters 1995, §5 (linear muscles with width and
 falloff) and Bibliowicz 2005, §4.2 (a joint from an origin under the skin to an
 insertion on the skin); a sphincter (``kind`` "sphincter") is an elliptical ring on the skin
-after Waters 1987 (centre and lateral point; :mod:`autobones.geometry.ring`).
+after Waters 1987 (centre and lateral point; :mod:`autobones.geometry.ring`), and a sheet (``kind``
+"sheet", mentalis) an elliptical patch given the same way.
 
 Everything is computed in the head's canonical frame (:func:`autobones.orient.detect_frame`:
 +Y up, +Z front, +X subject's left, head sizes) and returned in the input frame
@@ -77,7 +78,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..geometry.laplacian import diffuse, laplacian
-from ..geometry.ring import ring_frame, ring_profile
+from ..geometry.ring import RING_KINDS, ring_frame, ring_profile
 from ..geometry.smooth import step
 from ..geometry.topology import mesh_parts
 from ..skeleton import Skeleton
@@ -417,8 +418,8 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
     i0 = _combo(m["insertion"], L, f"{m['name']} insertion")
     _, fid, C = igl.point_mesh_squared_distance(np.array([o0, i0]), np.ascontiguousarray(Vc), Fi)
     o_skin, ins = C[0], C[1]
-    if m.get("kind") == "sphincter":
-        return _sphincter(m, o_skin, ins, Vc)
+    if m.get("kind") in RING_KINDS:
+        return _ring(m, o_skin, ins, Vc)
     tri = Vc[F[fid[0]]]
     n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
     n /= max(np.linalg.norm(n), 1e-300)
@@ -450,9 +451,10 @@ def _muscle(m, L, Vc, F, fu, cm, wn):
     return _placed(m, origin, ins, width, depth, bool(wn(origin)[0] > 0.5)), infl.astype(np.float64)
 
 
-def _sphincter(m, centre, lateral, Vc):
-    """A sphincter muscle (``kind`` "sphincter"): origin = the ring's centre on the skin, insertion =
-    its lateral point on the skin; influence = the ring's profile (:func:`ring_profile`)."""
+def _ring(m, centre, lateral, Vc):
+    """A sphincter or sheet muscle (``kind`` "sphincter" / "sheet"): origin = the ellipse's centre on
+    the skin, insertion = its lateral point on the skin; influence = the ellipse's profile
+    (:func:`ring_profile`)."""
     axes, half = ring_frame(centre, lateral)
     hole = m.get("hole")
     try:
@@ -462,7 +464,7 @@ def _sphincter(m, centre, lateral, Vc):
     except AutobonesError as exc:
         raise AutobonesError(f"muscle definition {m['name']}: {exc}") from None
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
-        raise AutobonesError(f"muscle definition {m['name']}: incomplete sphincter ({exc!r})") from None
+        raise AutobonesError(f"muscle definition {m['name']}: incomplete {m.get('kind')} ({exc!r})") from None
     return _placed(m, centre, lateral, half, 0.0, False), infl
 
 

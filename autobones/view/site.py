@@ -20,6 +20,7 @@ import numpy as np
 from ..batch.report import REPORT_FORMAT, REPORT_NAME, STATUSES
 from ..errors import AutobonesError
 from ..io.rig_files import load_rig
+from ..geometry.ring import RING_KINDS
 from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, sidecar_paths
 
@@ -233,7 +234,7 @@ def rig_facts(root, rel, record=None):
 def _muscles(meta):
     """The sidecar's muscles for the page: name, type, kind, origin, insertion and ``segments``, the
     rest-pose lines that picture each (:func:`autobones.render.muscle_segments`: a linear muscle's
-    origin -> insertion, a sphincter's ring) in the file's frame. A muscle whose ring cannot be drawn
+    origin -> insertion, a sphincter's ring, a sheet's outline) in the file's frame. A muscle whose ring cannot be drawn
     from the sidecar (no frame, a malformed reach) is pictured by its two ends, as before rings."""
     from ..render import muscle_segments
 
@@ -245,7 +246,7 @@ def _muscles(meta):
     for m in meta.get("muscles") or []:
         ends = [m.get("origin"), m.get("insertion")]
         seg = [ends] if all(e is not None for e in ends) else []
-        if frame is not None and m.get("kind") == "sphincter" and seg:
+        if frame is not None and m.get("kind") in RING_KINDS and seg:
             try:
                 S = muscle_segments([m], to_frame=frame.to_canonical)
                 seg = frame.from_canonical(S.reshape(-1, 3)).reshape(-1, 2, 3).tolist()

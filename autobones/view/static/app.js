@@ -175,14 +175,14 @@ async function showRig(rel, fromBatch) {
   }
 
   // muscles follow their marker nodes (children of bones); landmarks are the sidecar's rest positions.
-  // A linear muscle is its origin -> insertion; a sphincter is its ring (the sidecar's rest segments),
+  // A linear muscle is its origin -> insertion; a sphincter or sheet is its ellipse (the sidecar's rest segments),
   // carried rigidly by its centre's marker (the ring's origin)
   const nodeObjects = await Promise.all((json.nodes || []).map((_, i) => gltf.parser.getDependency('node', i)));
   const byName = new Map((json.nodes || []).map((nd, i) => [nd.name, nodeObjects[i]]));
   scene.updateMatrixWorld(true);
   const muscles = (facts.muscles || []).map((m) => {
     const o = byName.get(`muscle/${m.name}/origin`);
-    const ring = m.kind === 'sphincter' && (m.segments || []).length ? m.segments.flat() : null;
+    const ring = m.kind !== 'linear' && (m.segments || []).length > 1 ? m.segments.flat() : null;
     return { name: m.name, o, i: byName.get(`muscle/${m.name}/insertion`), origin: m.origin, insertion: m.insertion,
              ring, restInv: ring && o ? o.matrixWorld.clone().invert() : null };
   });
