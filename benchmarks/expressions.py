@@ -570,12 +570,18 @@ def _arkit_bench():
     return sys.modules["_bench_arkit"]
 
 
-def ict57_shapes():
+def ict57_shapes(shapes=None):
     """(ICT expression name, AU label) for every row of the definitions' ``au_arkit`` table, both
-    halves where ICT splits a shape, in the table's order."""
+    halves where ICT splits a shape, in the table's order; only those named in ``shapes`` if given
+    (SystemExit when none of them is in the table)."""
     from autobones.expressions.definitions import au_arkit_table
 
-    return [(n, "/".join(f"AU{a}" for a in row["au"])) for row in au_arkit_table() for n in row["ict"]]
+    rows = [(n, "/".join(f"AU{a}" for a in row["au"])) for row in au_arkit_table() for n in row["ict"]]
+    if shapes:
+        rows = [r for r in rows if r[0] in shapes]
+        if not rows:
+            raise SystemExit(f"--shapes: none of {shapes} is in the au_arkit table")
+    return rows
 
 
 def remeshed_identity(name, z, N0, F, part, lm_neutral):
@@ -597,11 +603,7 @@ def ict57_benchmark(source="identity002", targets=("identity000", "identity001")
     from autobones.rig_transfer.pipeline import load_generic
 
     t_all = time.perf_counter()
-    rows = ict57_shapes()
-    if shapes:
-        rows = [r for r in rows if r[0] in shapes]
-        if not rows:
-            raise SystemExit(f"--shapes: none of {shapes} is in the au_arkit table")
+    rows = ict57_shapes(shapes)
     z = np.load(ICT / "ict_facekit_shapes.npz")
     N0, F = load_mesh(NEUTRAL)
     assert np.abs(N0 - z["neutral"]).max() < 1e-4, "the npz's neutral is not generic_neutral_mesh.obj"
@@ -716,9 +718,7 @@ def ceiling_benchmark(source="identity002", shapes=None):
     or refinement can pass). Scored on the surrogate ``linear_pose`` itself, so the two columns
     differ only by the bounds. Prints the table; returns the per-shape scores."""
     t_all = time.perf_counter()
-    rows = ict57_shapes()
-    if shapes:
-        rows = [r for r in rows if r[0] in shapes]
+    rows = ict57_shapes(shapes)
     z = np.load(ICT / "ict_facekit_shapes.npz")
     E = {n: z[f"expression/{n}"].astype(np.float64) for n, _ in rows}
     rig_s, m_s, _, masks_s = rig_head(source, str(ICT / f"{source}.obj"), str(ICT / f"{source}.landmarks.json"))
@@ -741,8 +741,9 @@ def ceiling_benchmark(source="identity002", shapes=None):
         for key, sh in (("bounded", bounded), ("free", free)):
             c, jaw, lids, _ = fit_rig(m_s, X, sel, refine=0, solve=sh.solver(n, where))
             r[key] = explained(surrogate(c, jaw, lids), X, Vs, sel)
-            r[key + " range"] = (float(c.min()), float(c.max()))
-            r[key + " pushes"] = [f"{m_s.joints_.names[i]} {c[i]:.2f}" for i in np.argsort(c)[:3] if c[i] < -0.05]
+        # c is the free fit's: the muscles it makes push (a muscle cannot)
+        r["free range"] = (float(c.min()), float(c.max()))
+        r["free pushes"] = [f"{m_s.joints_.names[i]} {c[i]:.2f}" for i in np.argsort(c)[:3] if c[i] < -0.05]
         res[n] = r
         print(f"  {n} ({au}): bounded {fmt(r['bounded'])}, free {fmt(r['free'])} "
               f"(free contractions {r['free range'][0]:.2f} .. {r['free range'][1]:.2f}; most negative: "

@@ -61,7 +61,7 @@ from .mouth_parts import inner_mouth_parts, mouth_part_weights
 from .muscles import influence_fields, muscles_from_rig
 from .rig_inputs import rig_inputs
 from .skull import REGIONS_DEFAULT, skull_clamp, slide_over_bone, tissue_thickness
-from .sphincters import is_sphincter
+from .sphincters import is_sheet, is_sphincter
 from .surface import skin_surface
 from .unfold import flipped_faces
 from .unfold import unfold as unfold_folds
@@ -94,7 +94,7 @@ def _check_muscle_kinds(muscles, types):
         if t is None:
             continue
         built = m.get("kind", "linear")
-        moved = "sheet" if t.get("sheet") is not None else "sphincter" if is_sphincter(t) else "linear"
+        moved = "sheet" if is_sheet(t) else "sphincter" if is_sphincter(t) else "linear"
         if built != moved:
             raise AutobonesError(f"muscle {m.get('name')!r} is a {built} muscle in this rig but the expression "
                                  f"definitions move its type {m.get('type')!r} as a {moved}: pose it with the "

@@ -84,14 +84,15 @@ def sphincter_field(V, centre, lateral, profile, spec):
     axes, half = ring_frame(centre, lateral)
     X = (np.asarray(V, dtype=np.float64) - centre) @ axes.T          # ring coordinates, head sizes
     g = np.clip(np.asarray(profile, dtype=np.float64), 0.0, 1.0)
-    inward = -(float(s.get("narrow", 1.0)) * X[:, :1] * axes[0] + float(s.get("close", 1.0)) * X[:, 1:2] * axes[1])
+    x, y = X[:, :1], X[:, 1:2]
     if pull == "line":
         # toward the level line by the distance from it, at most the half size: the patch rises as
         # one piece, and the rim next to the line (the lower lip) less, so it does not ride over it
-        y = X[:, 1:2]
-        inward = -float(s.get("narrow", 0.0)) * X[:, :1] * axes[0] \
+        inward = -float(s.get("narrow", 0.0)) * x * axes[0] \
             - float(s.get("close", 1.0)) * np.sign(y) * np.minimum(np.abs(y), half) * axes[1]
-    elif pull == "sheet":
+    else:
+        inward = -(float(s.get("narrow", 1.0)) * x * axes[0] + float(s.get("close", 1.0)) * y * axes[1])
+    if pull == "sheet":
         # a unit pull toward the centre (the ring's half size at profile 1), not one growing with distance
         r = np.linalg.norm(X[:, :2], axis=1, keepdims=True)
         inward = inward * (half / np.maximum(r, 0.25 * half))

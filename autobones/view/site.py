@@ -19,8 +19,8 @@ import numpy as np
 
 from ..batch.report import REPORT_FORMAT, REPORT_NAME, STATUSES
 from ..errors import AutobonesError
-from ..io.rig_files import load_rig
 from ..geometry.ring import RING_KINDS
+from ..io.rig_files import load_rig
 from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, sidecar_paths
 
@@ -234,8 +234,8 @@ def rig_facts(root, rel, record=None):
 def _muscles(meta):
     """The sidecar's muscles for the page: name, type, kind, origin, insertion and ``segments``, the
     rest-pose lines that picture each (:func:`autobones.render.muscle_segments`: a linear muscle's
-    origin -> insertion, a sphincter's ring, a sheet's outline) in the file's frame. A muscle whose ring cannot be drawn
-    from the sidecar (no frame, a malformed reach) is pictured by its two ends, as before rings."""
+    origin -> insertion, a sphincter's ring, a sheet's outline) in the file's frame. A muscle whose
+    ellipse cannot be drawn from the sidecar (no frame, a malformed reach) is pictured by its two ends."""
     from ..render import muscle_segments
 
     try:
