@@ -162,12 +162,13 @@ def test_open_jaw_target_face_and_neck_stay_in_place(ict_rigged):
         e = 100 * np.linalg.norm(dense_correspondence(Vs, F, Vt, F, Ls, Lt, jaw=jaw, details=info)[0] - Vt, axis=1) / eye
         err[name] = {"face": (e[face].mean(), np.percentile(e[face], 95)),
                      "neck": (e[neck].mean(), np.percentile(e[neck], 95)), "angle": info["jaw_deg"]}
-    # measured (mean / p95 % of ex-ex): face 1.53 / 7.2 (no prior 2.5 / 9.6), neck 1.16 / 4.0 (3.7 / 9.1);
+    # measured (mean / p95 % of ex-ex): face 1.33 / 5.9 (no prior 2.5 / 9.7), neck 1.04 / 3.0 (3.5 / 8.8);
+    # 1.53 / 7.2 and 1.16 / 4.0 before the mouth interior's floor went with the jaw (jaw.inner_mouth_sides);
     # the jaw opened 19.6 degrees (ICT's lower teeth turn 25.3 about a pivot 2.5 cm from the rig's)
     p, n = err["prior"], err["none"]
     assert 15.0 < p["angle"] < 25.0, err
-    assert p["face"][0] < 1.9 and p["face"][1] < 8.5, err
-    assert p["neck"][0] < 1.6 and p["neck"][1] < 5.0, err
+    assert p["face"][0] < 1.6 and p["face"][1] < 7.0, err
+    assert p["neck"][0] < 1.3 and p["neck"][1] < 3.6, err
     assert p["face"][1] < 0.85 * n["face"][1] and p["neck"][1] < 0.6 * n["neck"][1], err
 
 

@@ -36,6 +36,11 @@ Seeds (what the landmarks say), each the vertex nearest a landmark, or a band of
   jaw weight may fade toward the neck, and on a short face (the robot's) a menton pinned to 1 a
   few edges from a ``pronasale`` pinned to 0 would force a step; it keeps the carried weight,
   smoothed;
+- a mouth interior (:func:`inner_mouth_sides`: ICT's, a game head's mouth bag; a closed-mouth scan
+  has none): its floor, facing up across the mouth plane, is jaw 1 and its roof, facing down, jaw 0.
+  Without them the interior was left to the smooth field between the outer lips' seeds: about half
+  jaw on both, so an opened jaw dragged the inside of the upper lip down and left the inside of the
+  lower lip behind;
 - upper (jaw 0): the upper lip along the lip line (above the mouth plane, same band), the upper
   lip, nose, eye, brow, forehead, ear and skull landmarks, and every vertex more than
   :data:`ABOVE_MARGIN` face units above the jaw's top plane (``stomion`` and both ``gonion``; without
@@ -73,6 +78,9 @@ ABOVE_MARGIN = 0.12     # fu above the jaw's top plane: jaw 0 there
 CORNER = 0.06           # fu: edges this near a mouth corner belong to the lip line
 RINGS = 8               # rings of edges around the springs that later rounds re-solve
 REACH = 0.4             # fu: vertices farther than this from any jaw weight keep theirs (0), unsolved
+INNER_DEPTH = 0.5       # fu behind the corners' line: how deep a mouth interior is seeded
+INNER_BAND = 0.25       # fu either side of the mouth plane
+INNER_FACING = 0.7      # cos 45 degrees: a floor faces up across the plane, a roof down
 LOWER = ("pogonion", "labiale_inferius", "sublabiale")  # not the menton: see the module doc
 UPPER = ("vertex", "opisthocranion", "glabella", "nasion", "pronasale", "subnasale", "labiale_superius",
          *(f"{n}_{s}" for n in ("exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius",
@@ -147,6 +155,45 @@ def _lip_sides(V, mouth, band, behind):
     zone = ((d @ mouth["forward"] > -behind) & (np.abs(d @ mouth["lateral"]) < mouth["half_width"] + behind)
             & (np.abs(s) < band))
     return np.where(zone, np.where(s > 0, 1, -1), 0).astype(np.int8)
+
+
+def inner_mouth_sides(V, F, landmarks):
+    """Which vertices line a mouth interior: (n,) int8, +1 its roof (jaw 0), -1 its floor (jaw 1), 0
+    elsewhere; all 0 without ``stomion`` and both ``cheilion``.
+
+    A vertex lines the interior when it lies behind the corners' line (at most :data:`INNER_DEPTH`
+    face units), between the corners, within :data:`INNER_BAND` face units of the mouth plane, and
+    faces across the mouth plane: a floor vertex below the plane facing up (within 45 degrees of the
+    plane's normal), a roof vertex above it facing down. A closed-mouth scan has no surface there,
+    and cheeks, chin and nose face other ways, so only the insides of the lips, the mouth's floor and
+    roof (and teeth, tongue or a mouth bag, when they are part of the mesh) are seeded. The mesh's
+    orientation is read at the lips, whose outer surface faces forward.
+    ``V`` (n, 3), ``F`` (m, 3), ``landmarks`` name -> (3,), mesh units and frame.
+    """
+    from scipy.spatial import cKDTree
+
+    from ..geometry.normals import vertex_normals
+
+    V = np.asarray(V, dtype=np.float64)
+    lm = {k: np.asarray(v, dtype=np.float64) for k, v in landmarks.items()}
+    mouth = mouth_frame(lm)
+    out = np.zeros(len(V), dtype=np.int8)
+    if mouth is None:
+        return out
+    fu = face_unit(V, lm)
+    N = vertex_normals(V, np.asarray(F))
+    lips = np.array([lm[n] for n in ("labiale_superius", "labiale_inferius", "stomion") if n in lm])
+    if (N[cKDTree(V).query(lips, workers=-1)[1]] @ mouth["forward"]).mean() < 0:
+        N = -N   # inward-facing triangles
+    d = V - mouth["mid"]
+    ahead = d @ mouth["forward"]
+    s = (V - mouth["stomion"]) @ mouth["normal"]
+    facing = N @ mouth["normal"]
+    zone = ((ahead < 0) & (ahead > -INNER_DEPTH * fu) & (np.abs(d @ mouth["lateral"]) < mouth["half_width"])
+            & (np.abs(s) < INNER_BAND * fu))
+    out[zone & (s > 0) & (facing < -INNER_FACING)] = 1
+    out[zone & (s < 0) & (facing > INNER_FACING)] = -1
+    return out
 
 
 def lip_line_edges(V, F, landmarks):
@@ -237,6 +284,10 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
         side = _lip_sides(Vw, mouth, max(0.05 * fu, 1.5 * h_med), 0.0)
         upper |= side > 0
         lower |= side < 0
+        # a mouth interior (ICT's, a game head's mouth bag): its floor goes with the jaw, its roof stays
+        inner = inner_mouth_sides(Vw, Fw, lm)
+        upper |= inner > 0
+        lower |= inner < 0
     if "stomion" in lm:
         # the upper face: well above the jaw's top plane (the gonions' when given)
         top = None
