@@ -490,7 +490,8 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         included), ``setup``, ``fit`` (setup and fit summed over the coarse and fine solves).
     jaw : dict, optional
         The source's jaw (:func:`autobones.rig_transfer.jaw_prior.jaw_prior`: ``weight`` (n,),
-        ``pivot`` (3,), ``axis`` (3,), source frame): the source skin's jaw is first opened as far
+        ``pivot`` (3,), ``axis`` (3,), ``glide`` (3,) per degree, optional; source frame): the source skin's
+        jaw is first opened (turned and glided) as far
         as the landmarks say (:func:`~autobones.rig_transfer.jaw_prior.estimate_jaw_angle`), and
         that posed skin is what the TPS warps and the shape term keeps. None: no prior.
     details : dict, optional
@@ -545,17 +546,18 @@ def _open_source_jaw(V_src, F_src, P, Q, jaw, details):
     """The source skin ``V_src`` (n, 3) and its landmarks ``P`` (k, 3) with the jaw opened to the
     target landmarks ``Q`` (k, 3) (:mod:`.jaw_prior`); each landmark moves with its closest point of
     the skin. Unchanged arrays when the estimate is 0."""
-    w, pivot, axis = check_prior(jaw, len(V_src))
+    w, pivot, axis, glide = check_prior(jaw, len(V_src))
     _, lface, lbary, _ = closest_points(P, V_src, F_src)
     on_skin = np.einsum("ij,ijk->ik", lbary, V_src[F_src[lface]])
     info = {}
-    angle = estimate_jaw_angle(P, Q, np.einsum("ij,ij->i", lbary, w[F_src[lface]]), pivot, axis, details=info)
+    angle = estimate_jaw_angle(P, Q, np.einsum("ij,ij->i", lbary, w[F_src[lface]]), pivot, axis, details=info,
+                               glide=glide)
     if details is not None:
         details.update(jaw_deg=angle, jaw=info)
     log.debug("fit_surface: jaw opened %.1f degrees (estimate %.2f)", angle, info["raw"])
     if angle == 0.0:
         return V_src, P
-    V_src = open_jaw(V_src, w, pivot, axis, angle)
+    V_src = open_jaw(V_src, w, pivot, axis, angle, glide)
     return V_src, P + np.einsum("ij,ijk->ik", lbary, V_src[F_src[lface]]) - on_skin
 
 

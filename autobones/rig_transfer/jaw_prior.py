@@ -7,7 +7,8 @@ open-mouth head drags the lower face, the chin and the neck (benchmarks/README.m
 Here the source skin is first posed with its own jaw bone, the way the rig itself opens the jaw
 (:func:`autobones.expressions.bones.turn_jaw`: each vertex turned about the hinge by its jaw weight
 times the angle, blending the angle rather than the positions, so half-weighted skin under the chin
-does not collapse toward the pivot), and the posed skin is what the TPS warps and what the fit's
+does not collapse toward the pivot, and moved by its weight times the condyle's glide, down and
+forward along the articular eminence, per degree: the definitions' ``model.jaw_glide``), and the posed skin is what the TPS warps and what the fit's
 shape term keeps (:func:`autobones.rig_transfer.correspondence.fit_surface`, ``jaw=``). The
 correspondence is still a map of the source's own vertices.
 
@@ -88,6 +89,41 @@ def jaw_hinge(skeleton):
     return pivot, axis / norm
 
 
+def jaw_glide_vector(skeleton, glide, fu):
+    """(3,) float: the jaw's translation per degree of opening, in the skeleton's frame and units.
+
+    ``glide`` = (down, forward) in face units per degree (the expression definitions'
+    ``model.jaw_glide``; :func:`autobones.expressions.jaw.jaw_glide` is the same in the canonical
+    frame); down is against the head bone, forward the jaw bone's direction (joint to chin) normal
+    to it; ``fu`` the face unit in mesh units. Raises AutobonesError as :func:`jaw_hinge`.
+    """
+    jaw_hinge(skeleton)  # the bones it needs, checked
+    names = list(skeleton.names)
+    j, h = names.index("jaw"), names.index("head")
+    up = np.asarray(skeleton.tails[h], dtype=np.float64) - np.asarray(skeleton.heads[h], dtype=np.float64)
+    up /= np.linalg.norm(up)
+    chin = np.asarray(skeleton.tails[j], dtype=np.float64) - np.asarray(skeleton.heads[j], dtype=np.float64)
+    ahead = chin - (chin @ up) * up
+    ahead /= np.linalg.norm(ahead)
+    down, forward = (list(np.ravel(glide).astype(float)) + [0.0, 0.0])[:2]
+    return float(fu) * (forward * ahead - down * up)
+
+
+def shipped_jaw_glide():
+    """(down, forward) face units per degree: ``model.jaw_glide`` of the shipped
+    ``generic_rig/expressions.json`` ((0, 0) when it has none), how ``pose`` glides the jaw."""
+    import json
+
+    from ..generic_rig import expressions_path
+
+    try:
+        with open(expressions_path(), encoding="utf-8") as fh:
+            glide = json.load(fh)["model"].get("jaw_glide", [0.0, 0.0])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise AutobonesError(f"{expressions_path()}: cannot read model.jaw_glide ({exc})") from None
+    return tuple((list(np.ravel(glide).astype(float)) + [0.0, 0.0])[:2])
+
+
 def spread_jaw_weight(V, F, weight, length):
     """The jaw weight spread over the skin: what the prior turns, not what the rig animates.
 
@@ -122,7 +158,7 @@ def spread_jaw_weight(V, F, weight, length):
     return np.clip(ws / c, 0.0, 1.0) if c > 0 else w
 
 
-def jaw_prior(rig, spread=SPREAD):
+def jaw_prior(rig, spread=SPREAD, glide=None):
     """The jaw prior of a rig for :func:`autobones.rig_transfer.correspondence.fit_surface` (``jaw=``).
 
     The weight is the rig's jaw weight spread over ``spread`` face units (:func:`spread_jaw_weight`)
@@ -137,12 +173,16 @@ def jaw_prior(rig, spread=SPREAD):
         distance), ``skeleton`` (``jaw`` and ``head`` bones) and ``weights`` (n, b).
     spread : float
         Face units the jaw weight is spread over (:func:`spread_jaw_weight`); 0: the rig's own.
+    glide : (2,) float, optional
+        (down, forward) face units per degree the jaw glides as it opens; None: the shipped
+        definitions' (:func:`shipped_jaw_glide`), (0, 0): a pure hinge.
 
     Returns
     -------
     dict
         ``weight`` (n,) float, the (spread) jaw weight of each skin vertex in [0, 1]; ``pivot`` (3,)
-        and ``axis`` (3,) as :func:`jaw_hinge`, in the rig's frame and units.
+        and ``axis`` (3,) as :func:`jaw_hinge`, and ``glide`` (3,) as :func:`jaw_glide_vector`, in the
+        rig's frame and units.
     """
     from .jaw import face_unit, mouth_frame
 
@@ -158,29 +198,34 @@ def jaw_prior(rig, spread=SPREAD):
         h = (np.asarray(rig.vertices, dtype=np.float64) - mouth["stomion"]) @ mouth["normal"] / (MOUTH_BAND * fu)
         t = np.clip(0.5 + 0.5 * h, 0.0, 1.0)
         ws = (1.0 - t) * ws + t * np.clip(w, 0.0, 1.0)
-    return {"weight": ws, "pivot": pivot, "axis": axis}
+    glide = jaw_glide_vector(rig.skeleton, shipped_jaw_glide() if glide is None else glide, fu)
+    return {"weight": ws, "pivot": pivot, "axis": axis, "glide": glide}
 
 
 def check_prior(jaw, n):
     """``jaw`` (dict as :func:`jaw_prior`) checked for a skin of ``n`` vertices: (weight (n,), pivot (3,),
-    unit axis (3,)) float arrays. Raises AutobonesError naming what is wrong."""
+    unit axis (3,), glide (3,)) float arrays; a dict without ``glide`` is a pure hinge (zeros).
+    Raises AutobonesError naming what is wrong."""
     try:
         w = np.asarray(jaw["weight"], dtype=np.float64).reshape(-1)
         pivot = np.asarray(jaw["pivot"], dtype=np.float64).reshape(3)
         axis = np.asarray(jaw["axis"], dtype=np.float64).reshape(3)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise AutobonesError("jaw: expected a dict with 'weight' (n,), 'pivot' (3,) and 'axis' (3,) "
-                             f"(see rig_transfer.jaw_prior.jaw_prior): {exc}") from None
+        glide = np.asarray(jaw.get("glide", np.zeros(3)), dtype=np.float64).reshape(3)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise AutobonesError("jaw: expected a dict with 'weight' (n,), 'pivot' (3,), 'axis' (3,) and "
+                             f"optionally 'glide' (3,) (see rig_transfer.jaw_prior.jaw_prior): {exc}") from None
     if len(w) != n:
         raise AutobonesError(f"jaw: 'weight' has {len(w)} values for a source of {n} vertices")
     norm = np.linalg.norm(axis)
-    if not (np.isfinite(w).all() and np.isfinite(pivot).all() and np.isfinite(norm) and norm > 0):
-        raise AutobonesError("jaw: weights, pivot and axis must be finite and the axis non-zero")
-    return np.clip(w, 0.0, 1.0), pivot, axis / norm
+    if not (np.isfinite(w).all() and np.isfinite(pivot).all() and np.isfinite(norm) and norm > 0
+            and np.isfinite(glide).all()):
+        raise AutobonesError("jaw: weights, pivot, axis and glide must be finite and the axis non-zero")
+    return np.clip(w, 0.0, 1.0), pivot, axis / norm, glide
 
 
-def open_jaw(V, weight, pivot, axis, angle):
-    """Vertices with the jaw opened: each turned about the hinge by its weight times ``angle``.
+def open_jaw(V, weight, pivot, axis, angle, glide=None):
+    """Vertices with the jaw opened: each turned about the hinge by its weight times ``angle``, then
+    moved by its weight times ``glide`` per degree.
 
     Parameters
     ----------
@@ -192,6 +237,8 @@ def open_jaw(V, weight, pivot, axis, angle):
         A point on the hinge and its unit axis.
     angle : float
         Degrees, positive opens (about ``axis``, right-handed).
+    glide : (3,) float, optional
+        Translation per degree (:func:`jaw_glide_vector`); None: a pure hinge.
 
     Returns
     -------
@@ -209,10 +256,12 @@ def open_jaw(V, weight, pivot, axis, angle):
     c, s = np.cos(a[rows])[:, None], np.sin(a[rows])[:, None]
     # Rodrigues, one angle per vertex
     out[rows] = pivot + r * c + np.cross(k, r) * s + np.outer(r @ k, k) * (1.0 - c)
+    if glide is not None and np.any(glide):
+        out[rows] += np.asarray(weight, dtype=np.float64)[rows, None] * (np.asarray(glide, dtype=np.float64) * float(angle))
     return out
 
 
-def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None):
+def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None, glide=None):
     """The jaw opening (degrees) that brings the source landmarks ``P`` closest to the target's ``Q``.
 
     Parameters
@@ -225,6 +274,8 @@ def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None):
         Jaw weight at each source landmark (0..1; the skin's weight at its point).
     pivot, axis : (3,) float
         The hinge (:func:`jaw_hinge`), unit axis.
+    glide : (3,) float, optional
+        The jaw's glide per degree (:func:`jaw_glide_vector`); None: a pure hinge.
     details : dict, optional
         Filled with ``raw`` (float, degrees: the estimate before :data:`DEAD_ZONE`), ``upper`` and
         ``lower`` (int, landmark counts used), ``residual`` (float, RMS distance of the jaw-carried
@@ -251,7 +302,7 @@ def estimate_jaw_angle(P, Q, weight, pivot, axis, details=None):
     Pl, wl = P[lower], w[lower]
 
     def cost(angle):
-        return float(((open_jaw(Pl, wl, pivot, axis, angle) - Qs) ** 2).sum())
+        return float(((open_jaw(Pl, wl, pivot, axis, angle, glide) - Qs) ** 2).sum())
 
     # a coarse scan, then a bounded refinement around the best cell: the cost is smooth but need
     # not be unimodal over the whole range
