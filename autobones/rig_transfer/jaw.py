@@ -170,8 +170,6 @@ def inner_mouth_sides(V, F, landmarks):
     orientation is read at the lips, whose outer surface faces forward.
     ``V`` (n, 3), ``F`` (m, 3), ``landmarks`` name -> (3,), mesh units and frame.
     """
-    from scipy.spatial import cKDTree
-
     from ..geometry.normals import vertex_normals
 
     V = np.asarray(V, dtype=np.float64)
@@ -181,16 +179,19 @@ def inner_mouth_sides(V, F, landmarks):
     if mouth is None:
         return out
     fu = face_unit(V, lm)
-    N = vertex_normals(V, np.asarray(F))
-    lips = np.array([lm[n] for n in ("labiale_superius", "labiale_inferius", "stomion") if n in lm])
-    if (N[cKDTree(V).query(lips, workers=-1)[1]] @ mouth["forward"]).mean() < 0:
-        N = -N   # inward-facing triangles
     d = V - mouth["mid"]
     ahead = d @ mouth["forward"]
     s = (V - mouth["stomion"]) @ mouth["normal"]
-    facing = N @ mouth["normal"]
     zone = ((ahead < 0) & (ahead > -INNER_DEPTH * fu) & (np.abs(d @ mouth["lateral"]) < mouth["half_width"])
             & (np.abs(s) < INNER_BAND * fu))
+    if not zone.any():
+        return out   # a closed mouth (most heads): no normals needed
+    N = vertex_normals(V, np.asarray(F))
+    lips = [lm[n] for n in ("labiale_superius", "labiale_inferius", "stomion") if n in lm]
+    at = [int(np.argmin(((V - p) ** 2).sum(axis=1))) for p in lips]
+    if (N[at] @ mouth["forward"]).mean() < 0:
+        N = -N   # inward-facing triangles
+    facing = N @ mouth["normal"]
     out[zone & (s > 0) & (facing < -INNER_FACING)] = 1
     out[zone & (s < 0) & (facing > INNER_FACING)] = -1
     return out

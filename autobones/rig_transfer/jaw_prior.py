@@ -76,6 +76,16 @@ def jaw_hinge(skeleton):
     AutobonesError
         No ``jaw`` or ``head`` bone, or the two bones parallel.
     """
+    pivot, chin, up = _jaw_bones(skeleton)
+    axis = np.cross(up, chin)   # turns ``up`` toward ``chin``: the chin turns on, away from the skull
+    norm = np.linalg.norm(axis)
+    if not np.isfinite(norm) or norm <= 1e-9 * np.linalg.norm(up) * np.linalg.norm(chin):
+        raise AutobonesError("the jaw prior: the rig's jaw and head bones are parallel, no hinge axis")
+    return pivot, axis / norm
+
+
+def _jaw_bones(skeleton):
+    """The jaw's joint (3,), the jaw bone (joint to chin, (3,)) and the head bone (3,) of a skeleton."""
     names = list(skeleton.names)
     if "jaw" not in names or "head" not in names:
         raise AutobonesError("the jaw prior needs a rig with 'jaw' and 'head' bones; "
@@ -84,11 +94,12 @@ def jaw_hinge(skeleton):
     pivot = np.asarray(skeleton.heads[j], dtype=np.float64)
     chin = np.asarray(skeleton.tails[j], dtype=np.float64) - pivot
     up = np.asarray(skeleton.tails[h], dtype=np.float64) - np.asarray(skeleton.heads[h], dtype=np.float64)
-    axis = np.cross(up, chin)   # turns ``up`` toward ``chin``: the chin turns on, away from the skull
-    norm = np.linalg.norm(axis)
-    if not np.isfinite(norm) or norm <= 1e-9 * np.linalg.norm(up) * np.linalg.norm(chin):
-        raise AutobonesError("the jaw prior: the rig's jaw and head bones are parallel, no hinge axis")
-    return pivot, axis / norm
+    return pivot, chin, up
+
+
+def _down_forward(glide):
+    """(down, forward) floats from a glide given as 0-2 numbers (missing ones 0)."""
+    return tuple((list(np.ravel(glide).astype(float)) + [0.0, 0.0])[:2])
 
 
 def jaw_glide_vector(skeleton, glide, fu):
@@ -99,15 +110,12 @@ def jaw_glide_vector(skeleton, glide, fu):
     frame); down is against the head bone, forward the jaw bone's direction (joint to chin) normal
     to it; ``fu`` the face unit in mesh units. Raises AutobonesError as :func:`jaw_hinge`.
     """
-    jaw_hinge(skeleton)  # the bones it needs, checked
-    names = list(skeleton.names)
-    j, h = names.index("jaw"), names.index("head")
-    up = np.asarray(skeleton.tails[h], dtype=np.float64) - np.asarray(skeleton.heads[h], dtype=np.float64)
+    jaw_hinge(skeleton)  # the bones it needs, checked (not parallel)
+    _, chin, up = _jaw_bones(skeleton)
     up /= np.linalg.norm(up)
-    chin = np.asarray(skeleton.tails[j], dtype=np.float64) - np.asarray(skeleton.heads[j], dtype=np.float64)
     ahead = chin - (chin @ up) * up
     ahead /= np.linalg.norm(ahead)
-    down, forward = (list(np.ravel(glide).astype(float)) + [0.0, 0.0])[:2]
+    down, forward = _down_forward(glide)
     return float(fu) * (forward * ahead - down * up)
 
 
@@ -123,7 +131,7 @@ def shipped_jaw_glide():
             glide = json.load(fh)["model"].get("jaw_glide", [0.0, 0.0])
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise AutobonesError(f"{expressions_path()}: cannot read model.jaw_glide ({exc})") from None
-    return tuple((list(np.ravel(glide).astype(float)) + [0.0, 0.0])[:2])
+    return _down_forward(glide)
 
 
 def spread_jaw_weight(V, F, weight, length):
