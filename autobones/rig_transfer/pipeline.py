@@ -228,7 +228,10 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
 
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
     # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
-    W = repair_jaw_weights(V, F, W, skeleton.names, lm)
+    jaw_details = {}
+    W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details)
+    if jaw_details.get("note"):
+        log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
     lap("attributes")
 
     labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
@@ -240,7 +243,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "detected" if detected is not None else "given",
                "rig": rig_option,
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
-               "symmetric": symmetry.record_}
+               "symmetric": symmetry.record_,
+               **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
