@@ -10,11 +10,17 @@ facial bones), each step a smooth (C1) factor, so no seam appears:
 1. facial bones: each facial weight is multiplied by a falloff of the distance to the facial
    mask, 1 on the mask and 0 beyond a blend band (``FACIAL_BAND`` head sizes), a smooth step
    between; the removed weight goes to the head bone (their parent);
-2. neck base: the share of the head and its children is multiplied by a smooth step of height,
-   0 on the lowest ``NECK_BASE`` of the neck (from the lowest vertex to the head/neck joint) and 1
-   from ``NECK_RISE`` of it up, so the neck base is pure neck and a head turn leaves it still;
-3. skull: the neck weight is multiplied by a smooth step falling from 1 at the joint's height to
-   0 at ``SKULL_BLEND`` of the way to the top of the head; the removed weight goes to the head bone.
+2. head and neck: the share of the head and its children is set by where a vertex lies, not by
+   the heat (which splits the neck from the head wherever the two bones' segments are equidistant,
+   a long way below the pivot on a bust): :func:`head_share` is 0 below a boundary through the
+   head joint (the occiput-C1 pivot, :mod:`.joints`) and 1 above it, a smooth step across a band
+   centred on the boundary. Behind the pivot the boundary is level with it (the suboccipital
+   region: the skull above turns, the nape below stays); in front it descends to pass under the
+   chin, so the jaw, chin and lips turn with the head and the throat stays with the neck. The
+   neck base is pure neck: the share is 0 up to the higher of the lowest ``NECK_BASE`` of the
+   vertices and ``NECK_BASE`` of the mesh's height, rising over the next ``NECK_RISE`` of the way
+   to the joint, so a head turn leaves it still. The neck gets the rest of each row, and the head
+   and facial bones keep the heat's proportions among themselves.
 
 The rows stay non-negative and sum to one (each step moves weight between bones), and are pruned
 again as the heat weights were. Everything is computed per vertex in the canonical frame (head
@@ -29,16 +35,21 @@ from scipy.spatial import cKDTree
 from ..geometry.smooth import smoothstep
 from ..geometry.topology import used_vertices
 from ..geometry.weights import prune_weights
+from .joints import NECK_BASE, neck_base_height
 
 FACIAL_BAND = 0.08   # head sizes: facial weights fade to 0 this far from the facial mask
-NECK_BASE = 0.05     # of the neck's height (lowest vertex to the joint): pure neck below
-NECK_RISE = 0.30     # of the neck's height: the head's share is the heat's own from here up
+FACE_HOLD = 2.0      # of the facial band: the face keeps the head's share this far out
+NECK_RISE = 0.30     # of the way from the neck base to the joint: the head's share rises over it
+HEAD_BAND = 0.10     # head sizes: half-width of the neck/head blend across the boundary
+BAND_SHARE = 0.4     # ... and at most this share of the height from the neck base to the joint
 SKULL_BLEND = 0.5    # of the height from the joint to the top: no neck weight above
+CHIN_MARGIN = 0.05   # head sizes: the boundary passes this far under the chin
+ROUND = 0.05         # head sizes: the boundary's bend at the pivot is rounded over this depth
 CHUNK = 65536
 
 
 def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, faces=None, band=FACIAL_BAND,
-                     neck_base=NECK_BASE, neck_rise=NECK_RISE, skull_blend=SKULL_BLEND, prune=0.01):
+                     chin=None, face_only=False, prune=0.01):
     """Restrict bone-heat weights to stay local (module docstring); in place, and returned.
 
     Parameters
@@ -60,8 +71,8 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
         stray loose vertex does not move the neck base).
     band : float
         Blend band around the facial mask, head sizes.
-    neck_base, neck_rise, skull_blend : float
-        Fractions of the neck's and the skull's height; see the module docstring.
+    chin, face_only
+        The boundary's and the neck base's options, see :func:`head_share`.
     prune : float
         Weights below this fraction of their row's largest are zeroed afterwards (0: none).
 
@@ -78,43 +89,85 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
     if len(facial) and np.array_equal(facial, np.arange(facial[0], facial[0] + len(facial))):
         facial = slice(int(facial[0]), int(facial[0]) + len(facial))  # a view, not a copy per block
     facial_mask = np.asarray(facial_mask, dtype=bool)
-    y = C[:, 1]
-    used = y if faces is None or len(faces) == 0 else y[used_vertices(np.asarray(faces), n)]
-    bottom, top, yj = float(used.min()), float(used.max()), float(joint[1])
-    neck_h, skull_h = max(yj - bottom, 1e-12), max(top - yj, 1e-12)
-
     # 1. facial bones fade out beyond the mask's blend band (distances bounded by it: inf beyond)
+    # the face holds the head's share over twice the facial band: the head/neck split is a larger
+    # move of weight than the facial bones' fade, and as steep a step would be a seam under the chin
+    keep, hold = np.zeros(n), np.zeros(n)
+    if facial_mask.any():
+        d, _ = cKDTree(C[facial_mask]).query(C, distance_upper_bound=FACE_HOLD * band)
+        keep = 1.0 - smoothstep(np.minimum(d, band) / band)
+        hold = 1.0 - smoothstep(np.minimum(d, FACE_HOLD * band) / (FACE_HOLD * band))
+        keep[facial_mask] = hold[facial_mask] = 1.0
     if (facial.stop > facial.start) if isinstance(facial, slice) else len(facial):
-        if facial_mask.any():
-            d, _ = cKDTree(C[facial_mask]).query(C, distance_upper_bound=band)
-            keep = 1.0 - smoothstep(np.minimum(d, band) / band)
-            keep[facial_mask] = 1.0
-        else:
-            keep = np.zeros(n)
         for s in range(0, n, CHUNK):
             blk = W[s:s + CHUNK, facial]
             k = keep[s:s + CHUNK, None]
             W[s:s + CHUNK, head] += (blk * (1.0 - k)).sum(axis=1)
             W[s:s + CHUNK, facial] = blk * k
 
-    # 2. the head's share (head and facial bones) fades to 0 at the neck base
-    rise = smoothstep((y - (bottom + neck_base * neck_h)) / max((neck_rise - neck_base) * neck_h, 1e-12))
-    low = np.flatnonzero(rise < 1.0)
-    if len(low):
-        others = np.array([j for j in range(b) if j != neck], dtype=np.int64)
-        sub = W[np.ix_(low, others)]
-        r = rise[low, None]
-        W[low, neck] += (sub * (1.0 - r)).sum(axis=1)
-        W[np.ix_(low, others)] = sub * r
-
-    # 3. the neck's weight fades to 0 above the joint
-    fade = smoothstep((y - yj) / max(skull_blend * skull_h, 1e-12))
-    moved = W[:, neck] * fade
-    W[:, neck] -= moved
-    W[:, head] += moved
+    # 2. the head's share (head and facial bones) from the boundary through the pivot, and all of the
+    # face and its band (a long muzzle hangs below any plane through the pivot); the rest is neck
+    share = head_share(C, joint, faces=faces, chin=chin, face_only=face_only, face=hold)
+    others = np.array([j for j in range(b) if j != neck], dtype=np.int64)
+    head_col = int(np.flatnonzero(others == head)[0])
+    for s in range(0, n, CHUNK):
+        blk, h = W[s:s + CHUNK][:, others], share[s:s + CHUNK]
+        total = blk.sum(axis=1)
+        # too much heat above the share: all scaled down alike; too little: the head bone takes the
+        # rest (scaling the facial bones up would steepen their own steps beyond the heat's)
+        over = total > h
+        blk[over] *= (h[over] / total[over])[:, None]
+        blk[~over, head_col] += (h - total)[~over]
+        W[s:s + CHUNK, others] = blk
+        W[s:s + CHUNK, neck] = 1.0 - h
 
     np.clip(W, 0.0, None, out=W)
     for s in range(0, n, CHUNK):
         blk = W[s:s + CHUNK]
         W[s:s + CHUNK] = prune_weights(blk, prune) if prune > 0 else blk / blk.sum(axis=1, keepdims=True)
     return W
+
+
+def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
+               neck_base=NECK_BASE, neck_rise=NECK_RISE):
+    """The head's share of each vertex (step 2 of the module docstring): (n,) in [0, 1].
+
+    Parameters
+    ----------
+    C : (n, 3) float
+        Canonical vertices (head sizes, +Y up, +Z front).
+    joint : (3,) float
+        The head joint (the pivot); the boundary runs through it.
+    faces : (m, 3) int, optional
+        Triangles: the neck base is measured on the vertices they use.
+    chin : (float, float), optional
+        The menton's height and the chin's front depth: in front of the pivot the boundary descends
+        to ``CHIN_MARGIN`` under that point (its slope kept between 0.3 and 2); default slope 1.
+    face_only : bool
+        A face-only mesh: it has no neck, so no neck base is kept still (its lowest vertices are the chin).
+    face : (n,) float, optional
+        1 on the facial mask falling to 0 across its band: the face turns with the head wherever
+        it hangs (a long muzzle below any boundary through the pivot).
+    band : float
+        Half-width of the blend across the boundary, head sizes (at most ``BAND_SHARE`` of the
+        height from the neck base to the joint).
+    neck_base, neck_rise : float
+        See the module docstring.
+    """
+    C = np.asarray(C, dtype=np.float64)
+    y, z = C[:, 1], C[:, 2]
+    used = y if faces is None or len(faces) == 0 else y[used_vertices(np.asarray(faces), len(C))]
+    yj, zj = float(joint[1]), float(joint[2])
+    base = min(neck_base_height(used, neck_base), yj - 1e-6)
+    slope = 1.0
+    if chin is not None:
+        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), 0.3, 2.0))
+    # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
+    boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
+    half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
+    share = smoothstep((y - boundary + half) / (2.0 * half))
+    if face is not None:
+        share = np.maximum(share, face)
+    if not face_only:
+        share *= smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+    return share

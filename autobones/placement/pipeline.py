@@ -86,14 +86,16 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy, prune=0)  # pruned once, after the restriction
     # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
     # blend band, the neck base pure neck, no neck weight on the skull
-    restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F)
+    joints = seg.joints
+    restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
+                     chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"])
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}
     return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
                timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
-               neck_height_canonical=seg.neck_height)
+               neck_height_canonical=seg.neck_height, other={"joints": joints.to_dict()})
 
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):

@@ -16,12 +16,16 @@ user can cut it at another group count, as 003 describes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 from scipy.cluster.hierarchy import fcluster
 
 from ..geometry.sample import sample_surface
 from ..geometry.topology import used_vertices
+from .joints import Joints, face_only, find_joints, neck_base_height
+
+JOINT_SAMPLES = 16000
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")
@@ -48,7 +52,11 @@ class HeadSegmentation:
     neck_height : float
         Height splitting the middle group into head (above) and neck (below).
     head_bone, neck_bone : (2, 3) float
-        Head and tail of each bone; ``neck_bone[1] == head_bone[0]``.
+        Head and tail of each bone; ``neck_bone[1] == head_bone[0]``, the head pivot.
+    chin_height : float or None
+        The menton's height from the midline profile's step under the chin (None: none found).
+    joints : Joints or None
+        Where the pivot and the neck base are and which cues placed them (:mod:`.joints`).
     """
 
     labels: np.ndarray
@@ -59,6 +67,8 @@ class HeadSegmentation:
     neck_height: float
     head_bone: np.ndarray
     neck_bone: np.ndarray
+    chin_height: Optional[float] = None
+    joints: Optional[Joints] = None
 
     def groups(self, n_groups):
         """Cut the depth merge tree at another group count; (s,) labels of the sample
@@ -100,16 +110,45 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
 
     head_mean, neck_mean = upper.mean(axis=0), lower.mean(axis=0)
     head_mean[0] = neck_mean[0] = 0.0  # on the symmetry plane
-    neck_dir = _neck_direction(lower)
-    # joint: where the neck line reaches the head/neck split height
-    t = (neck_height - neck_mean[1]) / neck_dir[1]
-    joint = neck_mean + t * neck_dir
-    joint[2] = head_mean[2]  # the head bone is vertical through the upper mean
-    top = V[:, 1].max()
-    head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), head_mean[2]])
-    half = 0.5 * (lower[:, 1].max() - lower[:, 1].min())
-    neck_root = neck_mean - (half / neck_dir[1]) * neck_dir
-    # keep the bones inside the volume (horns, a long muzzle or shoulders can put the
+    face_s = S[s_labels == FACE]
+    level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
+    head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
+    cut, chin = -np.inf, None
+    # the midline profile from the sample and the mesh's own vertices near the midline: a 4,000-point
+    # sample leaves some 1% bins of the 3% strip with no skin point, and an inner mouth part behind
+    # the lips then reads as a 0.4-head-size step (a 0.2 degree tilt of the frame moved the cut above
+    # the chin of ICT's head)
+    Vm = V[used_vertices(F, len(V))]
+    profile = np.vstack([S, Vm[np.abs(Vm[:, 0]) < 0.03]])
+    found = _chin_height(profile, neck_height, head_depth, S[:, 1].max())
+    for h, is_chin in ((found, True), (neck_height, False)):
+        # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
+        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
+            cut, chin = h, (h if is_chin else None)
+            break
+    joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean)
+    neck = V[:, 1] < cut
+    return HeadSegmentation(
+        labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
+        linkage=Z, sample_depth=depth, neck_height=float(neck_height),
+        head_bone=head_bone, neck_bone=neck_bone, chin_height=chin, joints=joints)
+
+
+def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean):
+    """The head pivot and the neck base (:func:`.joints.find_joints`) as bones kept inside the volume.
+
+    The head bone runs vertically from the pivot to 0.8 of the way to the top of the head, the neck
+    bone from the neck base to the pivot. ``Vm``: the used vertices; ``head_mean`` and ``neck_mean``
+    (the depth groups' upper and lower middle means) anchor the pull back inside."""
+    # a larger sample than the clustering's: the profile's 2% slabs and 12% midline strip need some
+    # tens of points each, and sampling is linear in the mesh
+    P, _, _ = sample_surface(V, F, JOINT_SAMPLES, seed=seed)
+    found = find_joints(P, float(Vm[:, 1].min()), float(Vm[:, 1].max()), chin=chin, face_mask=face_only(V, F),
+                        base=neck_base_height(Vm[:, 1]))
+    joint, neck_root = found.head.copy(), found.neck.copy()
+    top = Vm[:, 1].max()
+    head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), joint[2]])
+    # keep the bones inside the volume (horns, a long muzzle, a thin neck or shoulders can put the
     # geometric ends outside): pull each end toward its part's mean until it is inside
     Vi, Fi = (V, F) if volume is None else volume
     joint, head_tail, neck_root = _inside(Vi, Fi, np.array([joint, head_tail, neck_root]),
@@ -117,26 +156,8 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
     shift = _inside_shift(Vi, Fi, [(joint, head_tail), (neck_root, joint)])
     joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
-    face_s = S[s_labels == FACE]
-    level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
-    head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
-    cut = -np.inf
-    # the midline profile from the sample and the mesh's own vertices near the midline: a 4,000-point
-    # sample leaves some 1% bins of the 3% strip with no skin point, and an inner mouth part behind
-    # the lips then reads as a 0.4-head-size step (a 0.2 degree tilt of the frame moved the cut above
-    # the chin of ICT's head)
-    Vm = V[used_vertices(F, len(V))]
-    profile = np.vstack([S, Vm[np.abs(Vm[:, 0]) < 0.03]])
-    for h in (_chin_height(profile, neck_height, head_depth, S[:, 1].max()), neck_height):
-        # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
-        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
-            cut = h
-            break
-    neck = V[:, 1] < cut
-    return HeadSegmentation(
-        labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
-        linkage=Z, sample_depth=depth, neck_height=float(neck_height),
-        head_bone=np.array([joint, head_tail]), neck_bone=np.array([neck_root, joint]))
+    found.head, found.neck = joint, neck_root
+    return found, np.array([joint, head_tail]), np.array([neck_root, joint])
 
 
 def average_linkage_1d(x):
@@ -283,14 +304,3 @@ def _chin_height(points, neck_height, head_depth, top, strip=0.03, bin_size=0.01
     expected = top - 1.2 * head_depth
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
     return float(ends[np.argmin(np.abs(ends - expected))])
-
-
-def _neck_direction(points):
-    """Principal axis of the neck part in the sagittal (y, z) plane, pointing up."""
-    yz = points[:, 1:] - points[:, 1:].mean(axis=0)
-    w, U = np.linalg.eigh(yz.T @ yz)
-    d = U[:, -1]
-    if abs(d[0]) < 0.5:  # a wide, flat lower part (shoulders): fall back to vertical
-        d = np.array([1.0, 0.0])
-    d = d * np.sign(d[0])
-    return np.array([0.0, d[0], d[1]])

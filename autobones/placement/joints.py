@@ -1,0 +1,248 @@
+"""Where the head turns and where the neck starts: the occiput-C1 pivot and the neck's base, landmark-free.
+
+The bone-setting method ``place`` follows (Orvalho-style: a head bone through the upper part of the
+middle depth group, a neck bone below it) puts the head joint wherever the mesh's proportions put
+that group's mean: the brow of a long-necked bust, the jaw of a short one. A rigger expects the head
+to turn about the top of the spine. Chancey, Ottaviano, Myers & Nightingale (2007, J. Biomech. 40)
+measured, relative to the ear canal, the occiput-C1 centre of rotation 22.5 mm posterior and 22.6 mm
+inferior (adults, ex-ex about 90 mm, vertex-menton about 230 mm); in head proportions the pivot sits
+at the level of the nose base / upper lip, a third of the head's depth in front of the back of the
+head, above the neck's narrowest section and behind the jaw's angle. On an animal the same place is
+the base of the skull between the ears, behind the jaw's hinge, where the neck enters the head.
+
+Everything here is in the canonical frame (+Y up, +Z front, +X left, head sizes) and uses cues that
+need no landmarks, each recorded in :attr:`Joints.cues` when it was used:
+
+- ``chin``: the menton's height, from the step of the midline profile under the chin
+  (:func:`autobones.placement.segment.segment_head`); without one, ``proportions``: the height
+  anthropometry expects (vertex-menton about 1.2 head depths, Farkas 1994);
+- ``neck_section``: the narrowest horizontal section below the chin (bounding width x depth of an
+  area-uniform sample, slab by slab), and ``neck_axis``: the line through the sections' centres
+  above it, which the pivot continues (the spine runs up the neck, a little behind its middle);
+- ``back_of_skull``: with no neck to follow (a head cut at the chin, a face mask), the pivot's depth
+  is a share of the midline section at its height, measured from the back of the head;
+- ``shoulders`` or ``bottom_cut``: the neck joint sits where the neck widens into the shoulders or
+  a bust's base, or at the mesh's cut when the neck is cut off;
+- ``face_only``: an open shell facing forward (a face mask, orient's face-only capture): the head has
+  no back and no neck to measure, and the joints are placed by the head's proportions alone.
+
+The proportions below were measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
+Chancey's offsets scaled by their ex-ex): the pivot lies 0.70-0.72 of vertex-menton below the vertex,
+0.32-0.35 of the midline section's depth in front of the back of the head, 0.09-0.15 of the neck's
+depth behind the neck's centre line.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry.normals import triangle_normals
+
+PIVOT_DOWN = 0.69        # of the head's length below the vertex (Chancey's centre on SMPL heads: 0.68-0.70)
+PIVOT_FLOOR = 0.3        # of the mesh's height: the pivot stays at least this far above its bottom
+PIVOT_BACK = 0.34        # of the section's depth at the pivot, from its back (0.32-0.35 on the same heads)
+PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of its back (0.39-0.44)
+PIVOT_DOWN_MASK = 0.71   # a face mask: of its height below its top (vertex-menton: 0.70-0.72)
+PIVOT_BEHIND_MASK = 0.58  # a face mask: of its height behind its front (0.55-0.58)
+MENTON_DEPTHS = 1.2    # vertex-menton in head depths, when no chin step is found (Farkas 1994)
+SLAB = 0.02            # head sizes: height of a profile slab
+MIDLINE = 0.06         # head sizes: half-width of the strip the midline profile is taken from
+UNDER_CHIN = 0.06      # head sizes: the neck's sections start this far below the menton
+SHOULDERS = 1.5        # a section this many times the narrowest neck's width is the shoulders
+OPEN_FACE = 0.22       # vector area / area above which a forward-facing open shell is a face mask
+NECK_BASE = 0.05       # of the vertices and of the height: the neck base, kept still
+BASE_CLEARANCE = 0.15  # of the height: the pivot stays this far above the neck base
+
+
+@dataclass
+class Joints:
+    """Canonical ``head`` (occiput-C1 pivot) and ``neck`` (neck base) joints and the cues that placed them.
+
+    Attributes
+    ----------
+    head, neck : (3,) float
+        Canonical joint positions, on the midline (x = 0).
+    menton : float
+        The menton's height used (found or expected).
+    chin_front : float
+        Depth of the front of the section at the menton's height (the chin's front).
+    neck_section : float or None
+        Height of the neck's narrowest section, None when the mesh has no neck below the chin.
+    cues : dict
+        ``{"head": [...], "neck": [...]}``: the names of the cues used (module docstring).
+    """
+
+    head: np.ndarray
+    neck: np.ndarray
+    menton: float
+    chin_front: float = 0.0
+    neck_section: float | None = None
+    cues: dict = field(default_factory=dict)
+
+    def to_dict(self):
+        """The sidecar's ``joints`` entry (JSON values)."""
+        return {"head": {"cues": list(self.cues.get("head", []))},
+                "neck": {"cues": list(self.cues.get("neck", []))},
+                "menton_height": float(self.menton),
+                "neck_section_height": None if self.neck_section is None else float(self.neck_section)}
+
+
+def neck_base_height(heights, share=NECK_BASE):
+    """Top of the neck base: the higher of the lowest ``share`` of the vertices (a dense bust base,
+    a coarse neck under a dense face) and ``share`` of the height above the lowest vertex.
+    ``heights``: (k,) heights of the used vertices."""
+    heights = np.asarray(heights, dtype=np.float64)
+    low = float(heights.min())
+    return max(float(np.quantile(heights, share)), low + share * (float(heights.max()) - low))
+
+
+def face_only(V, F):
+    """True for a face mask: an open shell whose opening faces back or front (the vector area of a
+    closed head sums to zero, a neck cut's points down, a face-only capture's along the depth axis).
+    ``V`` canonical."""
+    N = triangle_normals(np.asarray(V, dtype=np.float64), np.asarray(F))
+    area = np.linalg.norm(N, axis=1).sum()
+    vec = N.sum(axis=0)
+    size = np.linalg.norm(vec)
+    return bool(size > OPEN_FACE * max(area, 1e-300) and abs(vec[2]) > 0.7 * size)
+
+
+def height_profile(S, bottom, top, slab=SLAB, midline=MIDLINE):
+    """Slab-by-slab extents of a canonical surface sample ``S`` (k, 3) between ``bottom`` and ``top``.
+
+    Returns a dict of (b,) arrays: ``y`` (slab centres), ``xmin``, ``xmax``, ``zmin``, ``zmax`` (all
+    points) and ``mzmin``, ``mzmax`` (the midline strip |x| < ``midline``); NaN where a slab is empty.
+    """
+    edges = np.arange(bottom, top + slab, slab)
+    nb = max(len(edges) - 1, 1)
+    k = np.clip(((S[:, 1] - bottom) / slab).astype(np.int64), 0, nb - 1)
+    out = {"y": bottom + slab * (np.arange(nb) + 0.5)}
+    mid = np.abs(S[:, 0]) < midline
+    for name, col, sel in (("x", 0, None), ("z", 2, None), ("mz", 2, mid)):
+        lo, hi = np.full(nb, np.inf), np.full(nb, -np.inf)
+        kk, v = (k, S[:, col]) if sel is None else (k[sel], S[sel, col])
+        np.minimum.at(lo, kk, v)
+        np.maximum.at(hi, kk, v)
+        empty = ~np.isfinite(lo)
+        lo[empty] = hi[empty] = np.nan
+        out[name + "min"], out[name + "max"] = lo, hi
+    return out
+
+
+def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
+    """The head pivot and the neck base of a head from its surface sample (module docstring).
+
+    Parameters
+    ----------
+    S : (k, 3) float
+        Area-uniform canonical surface sample (a few thousand points or more).
+    bottom, top : float
+        The mesh's lowest and highest heights (used vertices).
+    chin : float or None
+        The menton's height from the midline profile, None when no chin step was found; recorded,
+        and the neck's sections start below it.
+    face_mask : bool
+        The mesh is a face-only capture (:func:`face_only`).
+    base : float, optional
+        The neck base's top (:func:`neck_base_height`); default ``NECK_BASE`` of the height.
+
+    Returns
+    -------
+    Joints
+    """
+    prof = height_profile(S, bottom, top)
+    head_cues, neck_cues = [], []
+    height = top - bottom
+    # the vertex is the skull's top on the midline: horns and ears rise beside it
+    strip = S[np.abs(S[:, 0]) < MIDLINE, 1]
+    if len(strip) and strip.max() < top - SLAB:
+        top = float(strip.max())
+        head_cues.append("midline_top")
+    length = _head_length(prof, top)
+    if face_mask:
+        # no back and no neck: the mask spans about vertex (or brow) to menton
+        y_head = top - PIVOT_DOWN_MASK * height
+        z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * height
+        head_cues.append("face_only")
+    else:
+        y_head = top - PIVOT_DOWN * length
+        head_cues.append("head_length")
+        base = bottom + NECK_BASE * height if base is None else float(base)
+        floor = max(bottom + PIVOT_FLOOR * height, base + BASE_CLEARANCE * height)
+        if y_head < floor:
+            # a long snout makes the head long, not tall: the pivot stays above the neck's base
+            y_head = floor
+            head_cues.append("bottom_cut")
+        z_head = _section_depth(prof, y_head)
+        head_cues.append("back_of_skull")
+    menton = float(chin) if chin is not None else max(top - MENTON_DEPTHS * length, bottom)
+    neck = None if face_mask else _neck(prof, min(menton, y_head), bottom)
+    if chin is not None:
+        neck_cues.append("chin")
+    if neck is not None:
+        y_neck, z_neck = neck["base"], neck["base_z"]
+        neck_cues += ["neck_section", neck["base_cue"]]
+    else:
+        y_neck, z_neck = bottom, z_head
+        neck_cues += ["face_only"] if face_mask else ["bottom_cut"]
+    return Joints(head=np.array([0.0, y_head, z_head]), neck=np.array([0.0, y_neck, z_neck]), menton=menton,
+                  chin_front=_front(prof, menton), neck_section=None if neck is None else neck["height"],
+                  cues={"head": head_cues, "neck": neck_cues})
+
+
+def _head_length(prof, top):
+    """Length of the head, front to back: the largest depth of the slabs in the top half head size."""
+    upper = prof["y"] > top - 0.5
+    d = prof["zmax"][upper] - prof["zmin"][upper]
+    return float(np.nanmax(d)) if np.isfinite(d).any() else 1.0
+
+
+def _at(prof, key, y):
+    """``prof[key]`` at height ``y``, linear between the slabs' centres (NaN slabs skipped): continuous
+    in ``y``, so a pivot on a slab's edge does not jump with round-off (a rotated or rescaled copy of
+    the head gets the same joints). NaN when the profile has no such value."""
+    v = prof[key]
+    ok = np.isfinite(v)
+    return float(np.interp(y, prof["y"][ok], v[ok])) if ok.any() else float("nan")
+
+
+def _front(prof, y):
+    """The most anterior point of the section at height ``y`` (0 if there is none)."""
+    z = _at(prof, "zmax", y)
+    return z if np.isfinite(z) else 0.0
+
+
+def _section_depth(prof, y):
+    """The pivot's depth from the section at height ``y``: ``PIVOT_BACK`` of its depth in front of
+    its back, and no more than ``PIVOT_BACK_WIDTH`` of its width (a snout or a jaw far in front of
+    the neck lengthens the section, not the skull's base)."""
+    lo, hi = _at(prof, "zmin", y), _at(prof, "zmax", y)
+    width = _at(prof, "xmax", y) - _at(prof, "xmin", y)
+    if not np.isfinite(lo + hi + width):
+        return 0.0
+    return float(lo + min(PIVOT_BACK * (hi - lo), PIVOT_BACK_WIDTH * width))
+
+
+def _neck(prof, below, bottom):
+    """The neck below the head: its narrowest section and its base; None with no neck.
+
+    The slabs from two slabs above the bottom (a cut's last slab is partly empty) to
+    ``UNDER_CHIN`` below ``below`` are the neck's; the narrowest (bounding width x depth) is the
+    neck's waist, and the base is where the sections below the waist widen to ``SHOULDERS`` times
+    its width (shoulders, a bust's base), or the bottom cut."""
+    y = prof["y"]
+    w, d = prof["xmax"] - prof["xmin"], prof["zmax"] - prof["zmin"]
+    rows = np.flatnonzero((y < below - UNDER_CHIN) & (y > bottom + 2 * SLAB) & np.isfinite(w) & np.isfinite(d))
+    if len(rows) < 2:
+        return None
+    waist = int(rows[np.argmin(w[rows] * d[rows])])
+    below_waist = rows[rows < waist][::-1]
+    wide = below_waist[w[below_waist] >= SHOULDERS * w[waist]]
+    if len(wide):
+        base, base_cue, at = float(y[wide[0]]), "shoulders", int(wide[0]) + 1
+    else:
+        base, base_cue, at = float(bottom), "bottom_cut", int(rows[0])
+    centre = 0.5 * (prof["zmin"][at] + prof["zmax"][at])
+    return {"height": float(y[waist]), "depth": float(d[waist]), "base": base, "base_cue": base_cue,
+            "base_z": float(centre)}
