@@ -1,0 +1,509 @@
+"""The zoo benchmark (issue #31): every shared head and copies of it, checks that need no ground truth.
+
+    python benchmarks/zoo.py --quick                  # as-is, 2 rotations, x1000, decimated; checks 1-5
+    python benchmarks/zoo.py                          # every variant, checks 1-8
+    python benchmarks/zoo.py --heads cowHead,camelhead --checks 1,2 --markdown
+    python benchmarks/zoo.py --data /path/to/shared/data -j 2
+
+Heads: every mesh of ``../shared/data`` with a landmark file (``zoo/*``, menpo3d's james and template,
+ICT identities 000-002, the goat and the robot with ``tests/landmarks``' files) and the ``misc`` heads
+without landmarks (place-only checks). Variants: as is; 6 random rotations (seed 31); x0.001, x1000;
+remeshed (Loop x1, decimated back to the triangle count); decimated to 5k vertices (larger heads only);
+one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin.
+Landmarks follow the copy's rotation and scale (snapped to the surface on remeshed copies).
+
+Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
+1 frame: place's front / up within 30° of the landmarks'; rotated and scaled copies' frames mapped back
+  equal the as-is one to 1e-6 ("drift"). 2 jaw (T): jaw weight >= 0.9 at chin and lower lip, <= 0.1 at
+  nose, nasion, vertex; no jump > 0.3 off the lip line. 3 neck (P, T): on a 15° head turn the lowest 5% of
+  the vertices ("base") and of the height ("base(h)") move <= 1% of the peak. 4 pivot (P, T): head joint
+  behind the gonions, below the tragions, above the neck's base, on the midline (0.02 ex-ex); humans with
+  tragions: within 0.15 ex-ex of the occiput-C1 centre. 5 weights (P, T): weighted, sum 1, no NaN;
+  glTF: the Khronos validator's errors (as-is only). 6 correspondence (T): p95 offset of the generic
+  vertices' points on each copy (mapped back; by closest point on remeshed ones) from the as-is ones
+  <= 1% ex-ex (jittered copies excluded). 7 ARKit (humans, as-is): no triangle turned over, eyeBlinkLeft
+  closes >= 90% of the lid gap. 8 landmarks (humans, as-is): automatic detection runs.
+A cell: ``ok``, ``n/a: why``, ``-`` (not applicable), or the worst failing figure with the variant it came
+from and how many other variants failed (``up 47° [rot3 +2]``).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+import traceback
+import zlib
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import zoo_checks as zc  # noqa: E402
+
+import autobones  # noqa: E402
+from autobones.errors import AutobonesError  # noqa: E402
+from autobones.geometry.closest import closest_points  # noqa: E402
+from autobones.io.landmarks import read_landmarks  # noqa: E402
+from autobones.io.mesh import load_mesh  # noqa: E402
+
+DATA = ROOT.parent / "shared" / "data"
+TESTS_LM = ROOT / "tests" / "landmarks"
+FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in tests/ start with "tests/"
+    "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
+    "template": ("menpo3d/template.ply", "menpo3d/template.landmarks.json"),
+    **{f"identity00{k}": (f"ict/identity00{k}.obj", f"ict/identity00{k}.landmarks.json") for k in range(3)},
+    "goathead": ("misc/goathead.obj", "tests/goathead.landmarks.json"),
+    "robot_head_neutral": ("misc/robot_head_neutral.obj", "tests/robot_head_neutral.landmarks.json"),
+    **{n: (f"misc/{n}.obj", None) for n in ("LeePerrySmith", "demosthenes-low-res", "fran_cut", "fsaverage_head",
+                                           "koala_low_resolution", "robot_head_Angry", "robot_head_Sad",
+                                           "robot_head_Surprised")},
+}
+HUMAN = {"human_man", "human_woman", "james", "template", "identity000", "identity001", "identity002",
+         "LeePerrySmith", "demosthenes-low-res", "fran_cut"}
+ROTATIONS = 6
+VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
+            "jitter")
+QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k")
+COLUMNS = (("0 rig", 0), ("1 frame", 1), ("2 jaw", 2), ("3 neck P", 3), ("3 neck T", 3), ("4 pivot P", 4), ("4 pivot T", 4),
+           ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("7 ARKit", 7), ("8 landmarks", 8))
+CELL_MAX = 52
+
+
+def log(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+def heads_in(data):
+    """name -> (mesh path, landmark path or None): zoo/ (every landmark file with its mesh) and FIXED."""
+    out = {}
+    for lm in sorted((data / "zoo").glob("*.landmarks.json")):
+        name = lm.name[:-len(".landmarks.json")]
+        mesh = next((p for p in (data / "zoo" / f"{name}{e}" for e in (".obj", ".off", ".ply")) if p.exists()), None)
+        if mesh is not None:
+            out[name] = (mesh, lm)
+    for name, (mesh, lm) in FIXED.items():
+        lm = None if lm is None else (TESTS_LM / lm[6:] if lm.startswith("tests/") else data / lm)
+        if (data / mesh).exists():
+            out[name] = (data / mesh, lm)
+    return out
+
+
+# ------------------------------------------------------------------------------------- variants
+@dataclass
+class Variant:
+    name: str
+    V: np.ndarray
+    F: np.ndarray
+    lm: dict = None            # what transfer is given (jittered / snapped), variant frame
+    truth: dict = None         # the head's landmarks in the variant's frame (what checks measure against)
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))   # x' = s R x
+    s: float = 1.0
+    core: np.ndarray = None    # the head's own vertices (not the stray triangle)
+    snap: bool = False         # remeshed: mapped back by closest point
+
+    def back(self, P):
+        return np.asarray(P) @ self.R / self.s
+
+
+def rotations():
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.random(ROTATIONS, random_state=31).as_matrix()
+
+
+def remesh(V, F):
+    """One Loop subdivision, then quadric decimation back to ``len(F)`` triangles (as ``arkit.py``)."""
+    import fast_simplification
+    import trimesh
+
+    Vs, Fs = trimesh.remesh.subdivide_loop(V, F, iterations=1)
+    return compact(*fast_simplification.simplify(Vs, Fs, target_count=len(F)))
+
+
+def compact(V, F):
+    keep = np.unique(F)
+    remap = -np.ones(len(V), dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    return np.asarray(V, dtype=np.float64)[keep], remap[F]
+
+
+def decimate(V, F, vertices=5000):
+    import fast_simplification
+
+    return compact(*fast_simplification.simplify(V, F, target_count=2 * vertices))
+
+
+def snapped(lm, V, F):
+    if lm is None:
+        return None
+    names = list(lm)
+    C = closest_points(np.array([lm[n] for n in names]), V, F)[0]
+    return dict(zip(names, C))
+
+
+def make_variant(name, V, F, lm, seed):
+    """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
+    core = np.ones(len(V), dtype=bool)
+    if name == "as-is":
+        return Variant(name, V, F, lm, lm, core=core)
+    if name.startswith("rot") or name.startswith("x"):
+        R = rotations()[int(name[3:]) - 1] if name.startswith("rot") else np.eye(3)
+        s = 1.0 if name.startswith("rot") else float(name[1:])
+        tl = None if lm is None else {n: s * (R @ p) for n, p in lm.items()}
+        return Variant(name, s * V @ R.T, F, tl, tl, R=R, s=s, core=core)
+    if name in ("remesh", "dec5k"):
+        if name == "dec5k" and len(V) <= 5000:
+            return None
+        Vn, Fn = remesh(V, F) if name == "remesh" else decimate(V, F)
+        return Variant(name, Vn, Fn, snapped(lm, Vn, Fn), lm, core=np.ones(len(Vn), dtype=bool), snap=True)
+    if name == "stray":
+        size = float(np.ptp(V, axis=0).max())
+        p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+        tri = p + 0.02 * size * np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        Vn = np.vstack([V, tri])
+        Fn = np.vstack([F, len(V) + np.arange(3)[None]])
+        return Variant(name, Vn, Fn, lm, lm, core=np.r_[core, np.zeros(3, dtype=bool)])
+    if name == "jitter":
+        if lm is None:
+            return None
+        rng = np.random.default_rng(seed)
+        u = zc.unit(lm, V)
+        step = rng.normal(size=(len(lm), 3))
+        step *= 0.01 * u / np.linalg.norm(step, axis=1, keepdims=True)
+        moved = snapped({n: p + d for (n, p), d in zip(lm.items(), step)}, V, F)
+        return Variant(name, V, F, moved, lm, core=core)
+    raise ValueError(name)
+
+
+# ------------------------------------------------------------------------------------- rigs and checks
+def attempt(fn):
+    """(value, None) or (None, Result) for a refusal (AutobonesError) or an error."""
+    try:
+        return fn(), None
+    except AutobonesError as exc:
+        msg = "refused: " + " ".join(str(exc).split())
+        return None, zc.Result("refused", msg, 100.0, [("", msg)])
+    except Exception as exc:  # noqa: BLE001  (a benchmark cell, never a crash)
+        msg = f"error: {type(exc).__name__}: {' '.join(str(exc).split())}"
+        log(traceback.format_exc())
+        return None, zc.Result("error", msg, 100.0, [("", msg)])
+
+
+def guarded(fn, *args):
+    result, err = attempt(lambda: fn(*args))
+    return err or result
+
+
+NO_RIG = zc.Result("norig", "no rig")
+BAD = ("fail", "error", "refused")
+
+
+def merge(parts):
+    """One cell from several Results (``{"P": r, "T": r}``), each failing text prefixed by its label."""
+    parts = {k: r for k, r in parts.items() if r is not None and r.status != "norig"}
+    if not parts:
+        return None
+    bad = [(k, r) for k, r in parts.items() if r.status in BAD]
+    if not bad:
+        ok = [r for r in parts.values() if r.status == "ok"]
+        return ok[0] if ok else next(iter(parts.values()))
+    worst = max(bad, key=lambda kr: kr[1].severity)[1]
+    notes = [(k or lab, m) for k, r in bad for lab, m in r.notes]
+    text = "; ".join(f"{k} {r.status if r.notes else r.text}" if k else r.text for k, r in bad)
+    return zc.Result(worst.status, text, worst.severity, notes)
+
+
+@dataclass
+class Head:
+    name: str
+    human: bool
+    lm: dict
+    unit: float
+    ref: dict                   # landmark frame (None without landmarks)
+    up: np.ndarray = None       # the up used for heights (landmarks', else the as-is place rig's)
+    rotation0: np.ndarray = None
+    corr0: tuple = None         # (P0, ok0, V0, F0) of the as-is transfer
+    drift: list = field(default_factory=list)
+
+
+def turned(ref, R):
+    return None if ref is None else {k: R @ v for k, v in ref.items()}
+
+
+def place_checks(head, var, rig, checks):
+    out = {}
+    ref = turned(head.ref, var.R)
+    if 1 in checks:
+        res = zc.check_frame(rig, ref)
+        if var.name.startswith(("rot", "x")) and head.rotation0 is not None:
+            entries, deg = zc.frame_drift(rig.frame.rotation, head.rotation0, var.R)
+            head.drift.append((deg, var.name))
+            if entries > zc.DRIFT:
+                drift = (f"drift {deg:.1f}°" if deg >= 0.1 else f"drift {deg:.1e}°", 1 + deg)
+                fails = [] if res.status != "fail" else [(t, res.severity) for t in res.text.split(", ")]
+                res = zc.Result.of(fails + [drift])
+        out["1 frame"] = res
+    if 3 in checks:
+        out["3 neck P"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
+                                   zc.chin_height(var.truth, var.R @ head.up))
+    if 4 in checks:
+        out["4 pivot P"] = guarded(zc.check_pivot, rig, var.truth, ref, var.core, head.human)
+    if 5 in checks:
+        out["5 weights"] = guarded(zc.check_weights, rig)
+    return out
+
+
+def transfer_checks(head, var, rig, details, checks):
+    out = {}
+    ref = turned(head.ref, var.R)
+    if 2 in checks:
+        out["2 jaw"] = guarded(zc.check_jaw, rig, var.truth)
+    if 3 in checks:
+        out["3 neck T"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
+                                   zc.chin_height(var.truth, var.R @ head.up))
+    if 4 in checks:
+        out["4 pivot T"] = guarded(zc.check_pivot, rig, var.truth, ref, var.core, head.human)
+    if 5 in checks:
+        out["5 weights"] = guarded(zc.check_weights, rig)
+    if 6 in checks and var.name == "as-is":
+        head.corr0 = (details["correspondence"], details["reliable"], var.V, var.F)
+    elif 6 in checks and head.corr0 is not None and var.name != "jitter":
+        P0, ok0, V0, F0 = head.corr0
+        p95, _ = zc.correspondence_offset(details["correspondence"], P0, ok0 & details["reliable"], V0, F0,
+                                          var.back, var.snap)
+        out["6 corr"] = zc.check_correspondence(p95 / head.unit)
+    if 7 in checks and var.name == "as-is" and head.human:
+        out["7 ARKit"] = guarded(zc.check_arkit, rig, var.truth, var.R @ head.up)
+    return out
+
+
+def validate(rig, folder, tag):
+    path = Path(folder) / f"{tag}.glb"
+    rig.save(str(path))
+    return zc.check_gltf(path)
+
+
+def rig_checks(head, var, checks, folder):
+    """Every selected check on one copy: {column: Result}; ``0 rig`` says whether the rigs were made."""
+    cells, t = {}, time.perf_counter()
+    want_place = bool(checks & {1, 3, 4, 5})
+    want_transfer = var.lm is not None and bool(checks & {2, 3, 4, 5, 6, 7})
+    prig = trig = perr = terr = None
+    if want_place:
+        prig, perr = attempt(lambda: autobones.place((var.V, var.F)))
+        if var.name == "as-is" and prig is not None:
+            head.rotation0 = prig.frame.rotation
+            head.up = head.up if head.up is not None else prig.frame.rotation[1]
+        if perr is not None:
+            cells.update({c: NO_RIG for c in ("1 frame", "3 neck P", "4 pivot P", "5 weights")})
+        elif head.up is not None:
+            cells.update(place_checks(head, var, prig, checks))
+    tp = time.perf_counter() - t
+    if want_transfer:
+        details = {}
+        arkit = 7 in checks and var.name == "as-is" and head.human
+        trig, terr = attempt(lambda: autobones.transfer((var.V, var.F), var.lm, details=details, arkit=arkit))
+        if terr is not None:
+            cells.update({c: NO_RIG for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr", "7 ARKit")})
+        elif head.up is not None:
+            tc = transfer_checks(head, var, trig, details, checks)
+            if "5 weights" in tc:
+                tc["5 weights"] = merge({"P": cells.get("5 weights"), "T": tc["5 weights"]})
+            cells.update(tc)
+    made = lambda rig, err, want: None if not want else err or zc.Result("ok")  # noqa: E731
+    cells["0 rig"] = merge({"P": made(prig, perr, want_place), "T": made(trig, terr, want_transfer)})
+    if 5 in checks and var.name == "as-is":
+        cells["5 glTF"] = (zc.na("validator not installed") if not zc.validator_installed() else
+                           merge({"P": prig and guarded(validate, prig, folder, "place"),
+                                  "T": trig and guarded(validate, trig, folder, "transfer")}))
+    log(f"  {head.name} {var.name}: {len(var.V)} vertices, place {tp:.1f} s, total {time.perf_counter() - t:.1f} s"
+        + "".join(f"; {c} {r.text}" for c, r in cells.items() if r is not None and r.status != "ok"))
+    return cells
+
+
+def landmarks_cell(head, V, F):
+    """Check 8: automatic landmarks run on a human head (and how far they are from the given ones)."""
+    found, err = attempt(lambda: autobones.detect_landmarks((V, F)))
+    if err is not None:
+        return zc.na("MediaPipe extra not installed") if "pip install" in err.text else err
+    if not head.lm:
+        return zc.Result("ok", f"ok ({len(found)})")
+    shared = [n for n in found if n in head.lm]
+    e = np.mean([np.linalg.norm(found[n] - head.lm[n]) for n in shared]) / head.unit if shared else np.nan
+    return zc.Result("ok", f"ok ({len(found)}, {e:.1%})")
+
+
+# ------------------------------------------------------------------------------------- one head
+def run_head(name, mesh, lm_path, variants, checks):
+    """Every copy of one head: (name, {column: [(variant, Result)]}, seconds). Never raises."""
+    t = time.perf_counter()
+    found = {c: [] for c, _ in COLUMNS}
+    loaded, err = attempt(lambda: (load_mesh(mesh), None if lm_path is None else read_landmarks(lm_path)))
+    if err is not None:
+        return name, {**{c: [] for c, _ in COLUMNS}, "0 rig": [("load", err)]}, time.perf_counter() - t
+    (V, F), lm = loaded
+    if lm is not None:
+        lm = {n: np.asarray(p, dtype=np.float64) for n, p in lm.items()}
+    head = Head(name, name in HUMAN, lm, zc.unit(lm, V), zc.landmark_frame(V, F, lm))
+    head.up = None if head.ref is None else head.ref["up"]
+    with tempfile.TemporaryDirectory(prefix="zoo_") as folder:
+        for vname in variants:
+            var, err = attempt(lambda: make_variant(vname, V, F, lm, zlib.crc32(name.encode())))
+            if var is None and err is None:
+                continue
+            cells = {"0 rig": err} if err is not None else rig_checks(head, var, checks, folder)
+            for c, r in cells.items():
+                if r is not None:
+                    found[c].append((vname, r))
+    if 8 in checks and head.human:
+        found["8 landmarks"].append(("as-is", landmarks_cell(head, V, F)))
+    if lm is None:
+        for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr"):
+            found[c] = [("as-is", zc.na("no landmarks"))]
+    if head.drift:
+        deg, vname = max(head.drift)
+        log(f"  {name}: frame drift over rotated / scaled copies {deg:.3g}° ({vname})")
+    return name, found, time.perf_counter() - t
+
+
+def summarise(results):
+    """[(variant, Result)] -> one cell Result: the worst failure with its variant and how many other
+    variants failed, then the variants that were refused or errored (messages in the notes), else ok,
+    else the n/a reason; "no rig" when no variant had the rig; None: not run."""
+    results = [(v, r) for v, r in results if r is not None]
+    if not results:
+        return None
+    rigged = [(v, r) for v, r in results if r.status != "norig"]
+    if not rigged:
+        return zc.Result("norig", "no rig", 50.0)
+    fails = sorted([(v, r) for v, r in rigged if r.status == "fail" and not r.notes], key=lambda vr: -vr[1].severity)
+    parts = []
+    if fails:
+        more = f" +{len(fails) - 1}" if len(fails) > 1 else ""
+        parts.append(f"{fails[0][1].text} [{fails[0][0]}{more}]")
+    broken = [(v, r) for v, r in rigged if r.notes]
+    for kind in ("refused", "error"):
+        vs = [v for v, r in broken if any(m.startswith(kind) for _, m in r.notes)]
+        labels = sorted({lab for _, r in broken for lab, m in r.notes if m.startswith(kind) and lab})
+        if vs:
+            parts.append(f"{'/'.join(labels) + ' ' if labels else ''}{kind} [{', '.join(vs)}]")
+    if parts:
+        status = "fail" if fails else broken[0][1].status
+        return zc.Result(status, "; ".join(parts), fails[0][1].severity if fails else 100.0)
+    ok = [r for _, r in rigged if r.status == "ok"]
+    return ok[0] if ok else rigged[0][1]
+
+
+def error_notes(done):
+    """One line per head and distinct refusal / error message, with the rigs and variants it came from."""
+    out = []
+    for name, found, _ in done:
+        seen = {}
+        for results in found.values():
+            for v, r in results:
+                for lab, msg in (r.notes if r is not None else ()):
+                    labs, vs = seen.setdefault(msg, (set(), []))
+                    labs.add(lab)
+                    if v not in vs:
+                        vs.append(v)
+        out += [f"{name} {'/'.join(sorted(labs - {''})) + ' ' if labs - {''} else ''}[{', '.join(vs)}]: {msg}"
+                for msg, (labs, vs) in seen.items()]
+    return out
+
+
+def applies(column, name, checks):
+    number = dict(COLUMNS)[column]
+    return (number == 0 or number in checks) and (number not in (7, 8) or name in HUMAN)
+
+
+def table(rows, checks, markdown):
+    """rows: [(name, {column: Result or None})] -> the table text and the footnotes of long cells."""
+    cols = [c for c, n in COLUMNS if n in checks or n == 0]
+    notes, body = [], []
+    for name, cells in rows:
+        line = [name]
+        for c in cols:
+            r = cells.get(c)
+            text = "-" if r is None else r.text
+            if len(text) > CELL_MAX and not markdown:
+                notes.append(f"[{len(notes) + 1}] {name}, {c}: {text}")
+                text = text[:CELL_MAX - 6].rstrip() + f"… [{len(notes)}]"
+            line.append(text)
+        body.append(line)
+    head = ["head"] + cols
+    if markdown:
+        out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        out += ["| " + " | ".join(x.replace("|", "/") for x in line) + " |" for line in body]
+    else:
+        w = [max(len(x[i]) for x in [head] + body) for i in range(len(head))]
+        out = ["  ".join(x.ljust(w[i]) for i, x in enumerate(line)).rstrip() for line in [head] + body]
+    return "\n".join(out), notes
+
+
+def summary_line(rows, variant_counts):
+    cells = [r for _, cs in rows for r in cs.values() if r is not None and r.status not in ("na", "norig")]
+    passed = sum(r.status == "ok" for r in cells)
+    runs = [r for rs in variant_counts for _, r in rs if r is not None and r.status not in ("na", "norig")]
+    full = [n for n, cs in rows if all(r is None or r.status in ("ok", "na") for r in cs.values())]
+    return (f"checks passed: {passed}/{len(cells)} head cells ({sum(r.status == 'ok' for r in runs)}/{len(runs)} "
+            f"head-variant checks); heads fully passing: {len(full)}/{len(rows)}"
+            + (f" ({', '.join(full)})" if full else ""))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="as-is, 2 rotations, x1000, decimated; checks 1-5")
+    ap.add_argument("--heads", help="comma-separated head names (default: all)")
+    ap.add_argument("--checks", help="comma-separated check numbers 1-8 (default: 1-5 quick, 1-8 full)")
+    ap.add_argument("--variants", help="comma-separated variants (default: all, or the quick set)")
+    ap.add_argument("--markdown", action="store_true", help="a markdown table (for benchmarks/README.md)")
+    ap.add_argument("--data", type=Path, default=DATA, help="the shared data folder (default ../shared/data)")
+    ap.add_argument("-j", "--jobs", type=int, default=1, help="heads in parallel processes (default 1)")
+    args = ap.parse_args(argv)
+    heads = heads_in(args.data)
+    if args.heads:
+        wanted = [h.strip() for h in args.heads.split(",") if h.strip()]
+        unknown = [h for h in wanted if h not in heads]
+        if unknown:
+            ap.error(f"unknown heads {', '.join(unknown)}; known: {', '.join(heads)}")
+        heads = {h: heads[h] for h in wanted}
+    checks = ({int(c) for c in args.checks.split(",")} if args.checks else
+              set(range(1, 6)) if args.quick else set(range(1, 9)))
+    variants = tuple(args.variants.split(",")) if args.variants else QUICK if args.quick else VARIANTS
+    bad = [v for v in variants if v not in VARIANTS]
+    if bad:
+        ap.error(f"unknown variants {', '.join(bad)}; known: {', '.join(VARIANTS)}")
+    if "as-is" in variants:
+        variants = ("as-is",) + tuple(v for v in variants if v != "as-is")  # first: the others compare to it
+    t = time.perf_counter()
+    log(f"zoo: {len(heads)} heads x {len(variants)} variants, checks {sorted(checks)}")
+    jobs = [(n, m, lm, variants, checks) for n, (m, lm) in heads.items()]
+    if args.jobs > 1:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            done = list(pool.map(run_head, *zip(*jobs)))
+    else:
+        done = [run_head(*job) for job in jobs]
+    rows, raw = [], []
+    for name, found, seconds in done:
+        log(f"{name}: {seconds:.1f} s")
+        rows.append((name, {c: summarise(found[c]) if applies(c, name, checks) else None for c, _ in COLUMNS}))
+        raw.extend(found[c] for c, _ in COLUMNS if applies(c, name, checks))
+    text, notes = table(rows, checks, args.markdown)
+    print(text)
+    notes += error_notes(done)
+    if notes:
+        print("\n" + "\n".join(("- " if args.markdown else "") + n for n in notes))
+    print("\n" + summary_line(rows, raw))
+    print(f"{len(heads)} heads, variants {', '.join(variants)}; {time.perf_counter() - t:.0f} s")
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except KeyboardInterrupt:
+        traceback.print_exc()
+        sys.exit(130)

@@ -1,0 +1,330 @@
+"""The checks of ``benchmarks/zoo.py`` (issue #31): measures that need no ground truth.
+
+Each ``check_*`` function takes a rig (or two) and the head's reference geometry and returns a
+:class:`Result`: ``ok``, ``fail`` with the failing figure (``"up 47°"``, ``"chin 0.01"``), ``na``
+with the reason, or (set by the harness) ``error`` / ``refused``. Figures are in the units the issue
+states them in: degrees, jaw weight, share of the peak motion, ex-ex (exocanthion distance) units.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from autobones.arkit.folds import ON_TOP, folded_triangles
+from autobones.arkit.lids import eye_sides, gap_closure
+from autobones.geometry.closest import closest_points
+from autobones.geometry.rotations import axis_rotation
+from autobones.geometry.topology import used_vertices
+from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges
+
+ROOT = Path(__file__).resolve().parents[1]
+VALIDATOR_DIR = ROOT / "tools" / "gltf-validator"
+
+FRAME_DEG = 30.0           # check 1: front / up within this of the landmarks'
+DRIFT = 1e-6               # check 1: frame of a rotated / scaled copy vs the as-is one (rotation entries)
+JAW_ON, JAW_OFF = 0.9, 0.1  # check 2
+TURN_DEG, BASE_SHARE, BASE_MAX = 15.0, 0.05, 0.01  # check 3
+MIDLINE, C1_MAX = 0.02, 0.15  # check 4 (ex-ex units)
+C1_MM = (22.5, 22.6)       # occiput-C1 centre: posterior, inferior of the tragions' midpoint (Chancey 2007)
+EXEX_MM = 90.0
+SUM_TOL = 1e-6             # check 5
+CORR_MAX = 0.01            # check 6: p95 of the displacement, ex-ex units
+BLINK_MIN = 0.9            # check 7
+
+JAW_PROBES = (("pogonion", "chin", True), ("menton", "chin", True), ("labiale_inferius", "lip", True),
+              ("pronasale", "nose", False), ("nasion", "nasion", False), ("vertex", "vertex", False))
+
+
+@dataclass
+class Result:
+    status: str                # ok, fail, na, error, refused
+    text: str = ""             # the failing figure or the reason
+    severity: float = 0.0      # how far past the bound (ranks failures over variants)
+    notes: list = None         # [(rig label, full message)] of refusals and errors
+
+    def __post_init__(self):
+        self.text = self.text or self.status
+        self.notes = list(self.notes or [])
+
+    @staticmethod
+    def of(fails, ok_text="ok"):
+        """``fails`` [(text, severity)]: ok when empty, else the worst first (all figures joined)."""
+        if not fails:
+            return Result("ok", ok_text)
+        fails = sorted(fails, key=lambda f: -f[1])
+        return Result("fail", ", ".join(t for t, _ in fails), fails[0][1])
+
+
+def na(reason):
+    return Result("na", f"n/a: {reason}")
+
+
+def unit(lm, V):
+    """ex-ex in mesh units (the exocanthion distance; a quarter of the bbox diagonal without it)."""
+    return face_unit(V, lm or {})
+
+
+def _norm(v):
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.linalg.norm(v)
+
+
+def angle(a, b):
+    return float(np.degrees(np.arccos(np.clip(_norm(a) @ _norm(b), -1.0, 1.0))))
+
+
+def landmark_frame(V, F, lm):
+    """The landmarks' own frame: dict ``front``, ``up``, ``left`` (unit (3,)), or None.
+
+    front: opisthocranion (else the tragions' midpoint, else the mesh centroid) -> pronasale; up:
+    menton (else pogonion) -> vertex (else nasion), made orthogonal to front; left = up x front."""
+    if lm is None or "pronasale" not in lm:
+        return None
+    if "opisthocranion" in lm:
+        back = lm["opisthocranion"]
+    elif "tragion_l" in lm and "tragion_r" in lm:
+        back = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
+    else:
+        back = V[used_vertices(F, len(V))].mean(axis=0)
+    top = lm.get("vertex", lm.get("nasion"))
+    bottom = lm.get("menton", lm.get("pogonion"))
+    if top is None or bottom is None:
+        return None
+    front = _norm(lm["pronasale"] - back)
+    up = top - bottom
+    up = _norm(up - (up @ front) * front)
+    return {"front": front, "up": up, "left": np.cross(up, front)}
+
+
+def mirror_plane(lm, ref):
+    """(point, normal) of the landmarks' midplane: normal from the left-right pairs (else the frame's
+    left), through the mean of the pairs' midpoints and the midline landmarks."""
+    pairs = [(lm[n], lm[n[:-2] + "_r"]) for n in lm if n.endswith("_l") and n[:-2] + "_r" in lm]
+    normal = _norm(sum(a - b for a, b in pairs)) if pairs else ref["left"]
+    mids = [0.5 * (a + b) for a, b in pairs] + [p for n, p in lm.items() if not n.endswith(("_l", "_r"))]
+    return np.mean(mids, axis=0), normal
+
+
+# ------------------------------------------------------------------------------------- check 1
+def check_frame(rig, ref):
+    """The rig's detected front / up against the landmarks' (``ref`` in the variant's frame)."""
+    if ref is None:
+        return na("no landmark frame")
+    fails = []
+    for name, row in (("front", 2), ("up", 1)):
+        deg = angle(rig.frame.rotation[row], ref[name])
+        if deg > FRAME_DEG:
+            fails.append((f"{name} {deg:.0f}°", deg / FRAME_DEG))
+    return Result.of(fails)
+
+
+def frame_drift(rotation, rotation0, R):
+    """Largest difference (entries, degrees) between the frame of a copy turned by ``R`` (3, 3),
+    mapped back, and the as-is frame ``rotation0``."""
+    back = np.asarray(rotation) @ R          # rows r' = R r  ->  r = R^T r'
+    entries = float(np.abs(back - rotation0).max())
+    return entries, max(angle(a, b) for a, b in zip(back, rotation0))
+
+
+# ------------------------------------------------------------------------------------- check 2
+def family(skeleton, name):
+    """Indices of bone ``name`` and all its descendants."""
+    out = [skeleton.names.index(name)]
+    for i, p in enumerate(skeleton.parents):
+        if p in out:
+            out.append(i)
+    return out
+
+
+def check_jaw(rig, lm):
+    """Jaw weight at the chin / lower lip (>= 0.9) and nose / nasion / vertex (<= 0.1); edges off the
+    lip line whose jaw weight steps by more than 0.3 (as ``benchmarks/jaw_weights.py`` measures)."""
+    if "jaw" not in rig.skeleton.names:
+        return Result("fail", "no jaw bone", 1.0)
+    V, F = rig.vertices, rig.faces
+    jaw = rig.weights[:, family(rig.skeleton, "jaw")].sum(axis=1)
+    fails = {}
+    for name, label, on in JAW_PROBES:
+        if name not in lm:
+            continue
+        w = float(jaw[np.argmin(np.linalg.norm(V - lm[name], axis=1))])
+        bad = (JAW_ON - w) / JAW_ON if on else (w - JAW_OFF) / (1 - JAW_OFF)
+        if bad > 0 and bad >= fails.get(label, (None, 0))[1]:
+            fails[label] = (f"{label} {w:.2f}", bad)
+    E, on_line = lip_line_edges(V, F, lm)
+    jump = np.abs(jaw[E[:, 0]] - jaw[E[:, 1]])[~on_line]
+    if len(jump) and jump.max() > MAX_JUMP:
+        fails["jump"] = (f"jump {jump.max():.2f} x{int((jump > MAX_JUMP).sum())}",
+                         (jump.max() - MAX_JUMP) / (1 - MAX_JUMP))
+    return Result.of(list(fails.values()))
+
+
+# ------------------------------------------------------------------------------------- check 3
+def head_turn_motion(rig, deg=TURN_DEG):
+    """Per-vertex displacement (n,) of a ``deg`` yaw of the ``head`` bone (and its children) about
+    the rig's own up at the head joint, linear blend skinning (what ``pose --head 0,deg,0`` and a
+    glTF player do with the skin weights)."""
+    sk = rig.skeleton
+    w = rig.weights[:, family(sk, "head")].sum(axis=1)
+    rot = rig.frame.rotation
+    M = rot.T @ axis_rotation(1, deg) @ rot   # canonical +Y yaw, in the input frame
+    c = sk.heads[sk.names.index("head")]
+    X = rig.vertices - c
+    return w * np.linalg.norm(X @ (M - np.eye(3)).T, axis=1)
+
+
+def chin_height(lm, up):
+    """Height along ``up`` of the lowest chin landmark (menton, pogonion), or None."""
+    h = [float(lm[n] @ up) for n in ("menton", "pogonion") if lm and n in lm]
+    return min(h) if h else None
+
+
+def check_neck_base(rig, up, core, chin=None):
+    """The lowest 5% of the vertices and the lowest 5% of the height (along ``up``, over the ``core``
+    vertices) move at most 1% of the peak motion on a 15° head turn. The vertex share stops below the
+    ``chin`` height when given: on a head whose face is far denser than its neck (ICT) 5% of the
+    vertices reach above the chin, which must follow the head."""
+    if "head" not in rig.skeleton.names:
+        return Result("fail", "no head bone", 1.0)
+    d = head_turn_motion(rig)[core]
+    h = rig.vertices[core] @ up
+    peak = float(d.max())
+    if not peak > 0:
+        return Result("fail", "head turn moves nothing", 1.0)
+    lo_count = h <= np.quantile(h, BASE_SHARE)
+    if chin is not None and (h < chin).any():
+        lo_count &= h < chin
+    lo_height = h <= h.min() + BASE_SHARE * np.ptp(h)
+    fails = []
+    for label, zone in (("base", lo_count), ("base(h)", lo_height)):
+        share = float(d[zone].max()) / peak
+        if share > BASE_MAX:
+            fails.append((f"{label} {share:.1%}", share / BASE_MAX))
+    return Result.of(fails)
+
+
+# ------------------------------------------------------------------------------------- check 4
+def check_pivot(rig, lm, ref, core, human):
+    """The head joint behind the gonions' line, below the tragions, above the neck's base, on the
+    midline; on human heads with tragions its distance to the occiput-C1 centre (issue #32)."""
+    if ref is None or lm is None:
+        return na("no landmark frame")
+    if "head" not in rig.skeleton.names:
+        return Result("fail", "no head bone", 1.0)
+    j = rig.skeleton.heads[rig.skeleton.names.index("head")]
+    u = unit(lm, rig.vertices)
+    pair = lambda n: 0.5 * (lm[n + "_l"] + lm[n + "_r"]) if n + "_l" in lm and n + "_r" in lm else None  # noqa: E731
+    gonion, tragion = pair("gonion"), pair("tragion")
+    fails = []
+    if gonion is not None:
+        d = float((j - gonion) @ ref["front"]) / u
+        if d > 0:
+            fails.append((f"fwd of gonions {d:.2f}", 1 + d))
+    if tragion is not None:
+        d = float((j - tragion) @ ref["up"]) / u
+        if d > 0:
+            fails.append((f"above tragions {d:.2f}", 1 + d))
+    d = float(j @ ref["up"] - (rig.vertices[core] @ ref["up"]).min()) / u
+    if d < 0:
+        fails.append((f"below base {-d:.2f}", 1 - d))
+    p, n = mirror_plane(lm, ref)
+    d = abs(float((j - p) @ n)) / u
+    if d > MIDLINE:
+        fails.append((f"off midline {d:.3f}", d / MIDLINE))
+    if human and tragion is not None and "exocanthion_l" in lm:
+        C = tragion + (u / EXEX_MM) * (-C1_MM[0] * ref["front"] - C1_MM[1] * ref["up"])
+        d = float(np.linalg.norm(j - C)) / u
+        if d > C1_MAX:
+            fails.append((f"C1 {d:.2f}", d / C1_MAX))
+    return Result.of(fails)
+
+
+# ------------------------------------------------------------------------------------- check 5
+def check_weights(rig):
+    """Every vertex weighted, rows summing to 1 (1e-6), nothing NaN."""
+    W = np.asarray(rig.weights, dtype=np.float64)
+    fails = []
+    bad = ~np.isfinite(W).all(axis=1)
+    if bad.any():
+        fails.append((f"NaN {int(bad.sum())}", 10.0))
+    W = np.where(np.isfinite(W), W, 0.0)
+    empty = int((W.max(axis=1) <= 0).sum())
+    if empty:
+        fails.append((f"unweighted {empty}", 5.0))
+    off = float(np.abs(W.sum(axis=1) - 1.0).max())
+    if off > SUM_TOL:
+        fails.append((f"sum {off:.1e}", 1 + off))
+    if (W < 0).any():
+        fails.append((f"negative {W.min():.1e}", 2.0))
+    return Result.of(fails)
+
+
+def validator_installed():
+    return shutil.which("node") is not None and (VALIDATOR_DIR / "node_modules" / "gltf-validator").is_dir()
+
+
+def check_gltf(path):
+    """The Khronos glTF validator's errors on ``path`` (as ``tests/test_gltf_clients.py`` runs it)."""
+    if not validator_installed():
+        return na("validator not installed")
+    out = subprocess.run(["node", str(VALIDATOR_DIR / "validate.js"), str(path)], capture_output=True,
+                         text=True, timeout=300)
+    if out.returncode != 0:
+        return Result("error", f"error: validator exit {out.returncode}: {out.stderr.strip()[:80]}")
+    issues = json.loads(out.stdout)["issues"]
+    if issues["numErrors"]:
+        codes = sorted({m["code"] for m in issues["messages"] if m["severity"] == 0})
+        return Result("fail", f"{issues['numErrors']} errors ({', '.join(codes[:2])})", 1.0 + issues["numErrors"])
+    return Result("ok")
+
+
+# ------------------------------------------------------------------------------------- check 6
+def correspondence_offset(P, P0, ok, V0, F0, back, snap):
+    """p95 and max distance (mesh units, as-is frame) between each reliable generic vertex's point on a
+    copy ``P`` mapped back by ``back`` (and by closest point onto the as-is head when ``snap``) and its
+    point ``P0`` on the as-is head."""
+    Q = back(P[ok])
+    if snap:
+        Q = closest_points(Q, V0, F0)[0]
+    d = np.linalg.norm(Q - P0[ok], axis=1)
+    return float(np.quantile(d, 0.95)), float(d.max())
+
+
+def check_correspondence(p95_unit):
+    """``p95_unit``: the p95 offset in ex-ex units."""
+    if p95_unit > CORR_MAX:
+        return Result("fail", f"p95 {p95_unit:.1%}", p95_unit / CORR_MAX)
+    return Result("ok")
+
+
+# ------------------------------------------------------------------------------------- check 7
+def check_arkit(rig, lm, up):
+    """No triangle turned over by any ARKit shape at weight 1 (``mouthClose`` on top of ``jawOpen``);
+    ``eyeBlinkLeft`` closes >= 90% of the left lid gap (:func:`autobones.arkit.lids.gap_closure`,
+    between the palpebrale landmarks' surface points)."""
+    targets = rig.arkit_targets or {}
+    if not targets:
+        return Result("fail", "no ARKit shapes", 1.0)
+    V, F = rig.vertices, rig.faces
+    fails, folds = [], {}
+    for name, D in targets.items():
+        base = targets.get(ON_TOP.get(name))
+        k = int(folded_triangles(V, F, np.asarray(D), base=None if base is None else np.asarray(base)).sum())
+        if k:
+            folds[name] = k
+    if folds:
+        worst = max(folds, key=folds.get)
+        fails.append((f"folds {sum(folds.values())} ({worst} {folds[worst]}"
+                      + (f" +{len(folds) - 1} shapes)" if len(folds) > 1 else ")"), 1.0 + sum(folds.values())))
+    if "l" in eye_sides(lm) and "eyeBlinkLeft" in targets:
+        closed = gap_closure(V, F, targets["eyeBlinkLeft"], lm, "l", up)["points"]
+        if closed < BLINK_MIN:
+            fails.append((f"blink {closed:.0%}", 1 + BLINK_MIN - closed))
+    elif not fails:
+        return Result("ok", "ok (no lid landmarks)")
+    return Result.of(fails)
