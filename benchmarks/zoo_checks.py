@@ -224,14 +224,14 @@ def check_pivot(rig, lm, ref, core, human):
     if gonion is not None:
         d = float((j - gonion) @ ref["front"]) / u
         if d > 0:
-            fails.append((f"fwd of gonions {d:.2f}", 1 + d))
+            fails.append((f"fwd of gonions {d:.3f}", 1 + d))
     if tragion is not None:
         d = float((j - tragion) @ ref["up"]) / u
         if d > 0:
-            fails.append((f"above tragions {d:.2f}", 1 + d))
+            fails.append((f"above tragions {d:.3f}", 1 + d))
     d = float(j @ ref["up"] - (rig.vertices[core] @ ref["up"]).min()) / u
     if d < 0:
-        fails.append((f"below base {-d:.2f}", 1 - d))
+        fails.append((f"below base {-d:.3f}", 1 - d))
     p, n = mirror_plane(lm, ref)
     d = abs(float((j - p) @ n)) / u
     if d > MIDLINE:
