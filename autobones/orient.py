@@ -60,6 +60,16 @@ SAMPLE_COUNT = 3000
 # a face-only capture whatever its rim looks like
 OPEN_SHELL = 0.22
 FACE_SHELL = 0.4
+# a symmetry normal within AUTHORED_DEG of an input axis: the file was authored with its axes on the
+# head's (most are), and the up and front are looked for along the other two axes
+AUTHORED_DEG = 10.0
+AUTHORED = float(np.cos(np.radians(AUTHORED_DEG)))
+# a plane from the sample's principal directions replaces the best from the input axes only when it
+# mirrors the head this much better, so heads authored on their axes keep their frame bit for bit
+SHAPE_PLANE_GAIN = 0.8
+# ... and they are tried only when that best mirrors the head worse than this (its sample's RMS radii):
+# true planes measure 0.024-0.053 on the shared and zoo heads, the trapped ones 0.11-0.13
+SHAPE_PLANE_ABOVE = 0.06
 
 
 @dataclass(frozen=True)
@@ -181,16 +191,29 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             cues_job = pool.submit(_cut_cues, V, F) if up_v is None else None
             planes = list(pool.map(lambda n0: _refine_plane(P, tree, n0, center @ n0, rms), starts))
             cues = None if cues_job is None else cues_job.result()
-        best = None
-        for n, d in planes:
-            err = _mirror_error(P, tree, n, d)
-            if best is None or err < best[0] - 1e-9 * rms:
-                best = (err, n, d)
+        best = _best_plane(P, tree, planes, rms)
+        if up_v is None and front_v is None and best[0] > SHAPE_PLANE_ABOVE * rms:
+            # a head turned in its file (not about an axis) traps the ICPs started on the input axes
+            # on planes that mirror it badly (ICT turned at random: 0.11-0.13 head sizes against
+            # 0.03): the planes started from the sample's own principal directions win then
+            shaped = _best_plane(P, tree, [_refine_plane(P, tree, n0, center @ n0, rms)
+                                           for n0 in _shape_starts(P)], rms)
+            best = shaped if shaped[0] < SHAPE_PLANE_GAIN * best[0] else best
         sym_err, normal, offset = best[0] / rms, best[1], best[2]
-        candidates = _candidates(normal, up_v, front_v)
+        if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
+            candidates = _shape_candidates(P, normal, cues)
+        else:
+            candidates = _candidates(normal, up_v, front_v)
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
-    if len(candidates) > 1 and up_v is None:
+    shaped = up_v is None and front_v is None and np.abs(normal).max() < AUTHORED
+    if shaped and cues["loop_normal"] is not None:
+        # the main cut's far side is the bottom (a neck cut, a bust base) or the back (a face-only
+        # capture), or between (a neck cut slanted down and back)
+        d = cues["loop_normal"]
+        candidates = [(u, f) for u, f in candidates
+                      if max(-(d @ u), -(d @ f)) > 0.3 and d @ u < 0.3 and d @ f < 0.3] or candidates
+    elif len(candidates) > 1 and up_v is None:
         # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
         bases = {}
         cues = _cut_cues(V, F) if cues is None else cues
@@ -240,6 +263,52 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
 
 
+def _best_plane(P, tree, planes, rms):
+    """(error, normal, offset) of the plane in ``planes`` that mirrors ``P`` onto itself best; the
+    first of equals, so the order of the starts decides ties."""
+    best = None
+    for n, d in planes:
+        err = _mirror_error(P, tree, n, d)
+        if best is None or err < best[0] - 1e-9 * rms:
+            best = (err, n, d)
+    return best
+
+
+def _shape_starts(P):
+    """13 plane normals (3,) fixed to the sample's principal axes: the axes, the 6 face diagonals
+    and the 4 cube diagonals of that frame. The set is the same whichever sign each axis has, so
+    a head turned any way in its file gets the same starts."""
+    c = P - P.mean(axis=0)
+    _, E = np.linalg.eigh(c.T @ c)
+    dirs = list(np.eye(3))
+    dirs += [np.array(v) / np.sqrt(2) for v in ((1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1), (0, 1, 1), (0, 1, -1))]
+    dirs += [np.array(v) / np.sqrt(3) for v in ((1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1))]
+    return [E @ d for d in dirs]
+
+
+def _shape_candidates(P, normal, cues, steps=12):
+    """Signed (up, front) pairs for a head turned in its file: ``steps`` directions round the
+    symmetry plane, from the main cut's far side (a neck cut or a bust base: see
+    :func:`_main_loop`) or, with none, the sample's longest in-plane axis; plus any input axis that
+    lies in the plane (a head turned about its up axis keeps that axis as a candidate)."""
+    ref = cues["loop_normal"] if cues is not None and cues["loop_normal"] is not None else None
+    if ref is None or np.linalg.norm(ref - (ref @ normal) * normal) < 0.3:
+        c = P - P.mean(axis=0)
+        c = c - np.outer(c @ normal, normal)
+        _, E = np.linalg.eigh(c.T @ c)
+        ref = E[:, 2]
+    a = ref - (ref @ normal) * normal
+    a /= np.linalg.norm(a)
+    b = np.cross(normal, a)
+    ups = [np.cos(t) * a + np.sin(t) * b for t in np.radians(np.arange(steps) * 360.0 / steps)]
+    for axis in np.eye(3):
+        if abs(axis @ normal) < np.sin(np.radians(AUTHORED_DEG)):
+            for sign in (1.0, -1.0):
+                u = sign * (axis - (axis @ normal) * normal)
+                ups.append(u / np.linalg.norm(u))
+    return [(u, f) for u in ups for f in (np.cross(normal, u), np.cross(u, normal))]
+
+
 def _candidates(normal, up_v, front_v):
     """Signed (up, front) pairs, orthonormal and orthogonal to the symmetry normal: up is an
     input axis projected into the symmetry plane, front completes the frame."""
@@ -274,9 +343,43 @@ def _cut_cues(V, F):
     key = np.sort(np.minimum(a, b) * len(Vw) + np.maximum(a, b))
     once = np.r_[True, key[1:] != key[:-1]] & np.r_[key[1:] != key[:-1], True]
     rim = np.column_stack([key[once] // len(Vw), key[once] % len(Vw)])
-    return {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
+    cues = {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
             "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
             "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
+    cues.update(_main_loop(Vw, rim, cues))
+    return cues
+
+
+def _main_loop(Vw, rim, cues):
+    """The longest open-rim loop (edges (k, 2) into welded vertices ``Vw``) as a cut: its length,
+    its best-fit plane's unit normal pointing away from the surface (toward the missing cap) and
+    how far its points stray from that plane, over the loop's RMS radius.
+
+    A neck cut or a bust base is a planar loop (every zoo head cut at the neck: 0.00-0.02 of
+    the extent); a face-only capture's rim follows the face's outline round to the ears
+    (0.13-0.27), and eye or mouth holes are short loops of their own."""
+    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf}
+    if not len(rim):
+        return none
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(Vw)
+    graph = coo_matrix((np.ones(len(rim)), (rim[:, 0], rim[:, 1])), shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    edge_comp = comp[rim[:, 0]]
+    lengths = np.bincount(edge_comp, weights=cues["rim_length"])
+    best = int(np.argmax(lengths))  # ties: the lowest label, a function of the vertex order only
+    pts = cues["rim_mid"][edge_comp == best]
+    w = cues["rim_length"][edge_comp == best]
+    mid = w @ pts / w.sum()
+    d = pts - mid
+    evals, evecs = np.linalg.eigh((d * w[:, None]).T @ d / w.sum())
+    normal = evecs[:, 0]
+    surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
+    normal = normal if (mid - surface_mid) @ normal >= 0 else -normal
+    flatness = float(np.sqrt(max(evals[0], 0.0)) / max(np.sqrt(evals[1] + evals[2]), 1e-300))
+    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness}
 
 
 def _open_shell_facing(cues):
