@@ -44,9 +44,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import AutobonesError
-from .geometry.normals import triangle_normals
 from .geometry.sample import sample_surface
-from .geometry.topology import used_vertices, weld
+from .geometry.topology import used_vertices
+from .cut_cues import base_score as _base_score, cut_cues as _cut_cues, open_shell_facing as _open_shell_facing
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
@@ -55,7 +55,7 @@ AXES = {
 }
 
 SAMPLE_COUNT = 3000
-# vector area / area of an open surface (orient._open_shell_facing): above OPEN_SHELL a clear cut
+# vector area / area of an open surface (cut_cues.open_shell_facing): above OPEN_SHELL a clear cut
 # opposite the way it faces is its back (a face-only capture), not a neck cut; above FACE_SHELL it is
 # a face-only capture whatever its rim looks like
 OPEN_SHELL = 0.22
@@ -180,26 +180,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         sym_err = _mirror_error(P, tree, normal, offset) / rms
         candidates, cues = [(up_v, front_v)], None
     else:
-        if up_v is not None or front_v is not None:
-            given = up_v if up_v is not None else front_v
-            starts = [np.array(a) for a in np.eye(3) if abs(a @ given) < 0.5]
-        else:
-            starts = list(np.eye(3))
-        # independent ICPs whose time is in k-d tree queries and numpy, which release the GIL: on
-        # threads, beside the cut cues (needed when up is not given), in about half the time
-        with ThreadPoolExecutor(max_workers=min(len(starts) + 1, os.cpu_count() or 1)) as pool:
-            cues_job = pool.submit(_cut_cues, V, F) if up_v is None else None
-            planes = list(pool.map(lambda n0: _refine_plane(P, tree, n0, center @ n0, rms), starts))
-            cues = None if cues_job is None else cues_job.result()
-        best = _best_plane(P, tree, planes, rms)
-        if up_v is None and front_v is None and best[0] > SHAPE_PLANE_ABOVE * rms:
-            # a head turned in its file (not about an axis) traps the ICPs started on the input axes
-            # on planes that mirror it badly (ICT turned at random: 0.11-0.13 head sizes against
-            # 0.03): the planes started from the sample's own principal directions win then
-            shaped = _best_plane(P, tree, [_refine_plane(P, tree, n0, center @ n0, rms)
-                                           for n0 in _shape_starts(P)], rms)
-            best = shaped if shaped[0] < SHAPE_PLANE_GAIN * best[0] else best
-        sym_err, normal, offset = best[0] / rms, best[1], best[2]
+        sym_err, normal, offset, cues = _symmetry_plane(V, F, P, tree, rms, up_v, front_v)
         if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
             candidates = _shape_candidates(P, normal, cues)
         else:
@@ -261,6 +242,29 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
+
+
+def _symmetry_plane(V, F, P, tree, rms, up_v, front_v):
+    """The symmetry plane of the sample ``P`` (input frame) as (mirror error in RMS radii, unit
+    normal, offset), and the cut cues (None when up is given), computed beside the plane's ICPs."""
+    center = P.mean(axis=0)
+    given = up_v if up_v is not None else front_v
+    starts = [np.array(a) for a in np.eye(3) if given is None or abs(a @ given) < 0.5]
+    # independent ICPs whose time is in k-d tree queries and numpy, which release the GIL: on
+    # threads, beside the cut cues (needed when up is not given), in about half the time
+    with ThreadPoolExecutor(max_workers=min(len(starts) + 1, os.cpu_count() or 1)) as pool:
+        cues_job = pool.submit(_cut_cues, V, F) if up_v is None else None
+        planes = list(pool.map(lambda n0: _refine_plane(P, tree, n0, center @ n0, rms), starts))
+        cues = None if cues_job is None else cues_job.result()
+    best = _best_plane(P, tree, planes, rms)
+    if given is None and best[0] > SHAPE_PLANE_ABOVE * rms:
+        # a head turned in its file (not about an axis) traps the ICPs started on the input axes
+        # on planes that mirror it badly (ICT turned at random: 0.11-0.13 head sizes against
+        # 0.03): the planes started from the sample's own principal directions win then
+        shaped = _best_plane(P, tree, [_refine_plane(P, tree, n0, center @ n0, rms)
+                                       for n0 in _shape_starts(P)], rms)
+        best = shaped if shaped[0] < SHAPE_PLANE_GAIN * best[0] else best
+    return best[0] / rms, best[1], best[2], cues
 
 
 def _best_plane(P, tree, planes, rms):
@@ -327,94 +331,6 @@ def _candidates(normal, up_v, front_v):
     if not out:
         raise AutobonesError("the given --up/--front lies along the head's left-right axis; pick another axis")
     return out
-
-
-def _cut_cues(V, F):
-    """What a cut looks like, computed once: face centroids, unit normals and areas, and the
-    open rim (edges with one face, after welding by position so unwelded meshes have none
-    spurious) as midpoints and lengths."""
-    cross = triangle_normals(V, F)
-    area2 = np.linalg.norm(cross, axis=1)
-    normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
-    heights = V[used_vertices(F, len(V))]
-    Vw, Fw, _ = weld(V, F, 1e-6 * np.ptp(heights, axis=0).max())
-    # edge keys (low * n + high); an open-rim edge is one whose key occurs once
-    a, b = Fw.T.ravel(), Fw[:, [1, 2, 0]].T.ravel()
-    key = np.sort(np.minimum(a, b) * len(Vw) + np.maximum(a, b))
-    once = np.r_[True, key[1:] != key[:-1]] & np.r_[key[1:] != key[:-1], True]
-    rim = np.column_stack([key[once] // len(Vw), key[once] % len(Vw)])
-    cues = {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
-            "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
-            "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
-    cues.update(_main_loop(Vw, rim, cues))
-    return cues
-
-
-def _main_loop(Vw, rim, cues):
-    """The longest open-rim loop (edges (k, 2) into welded vertices ``Vw``) as a cut: its length,
-    its best-fit plane's unit normal pointing away from the surface (toward the missing cap) and
-    how far its points stray from that plane, over the loop's RMS radius.
-
-    A neck cut or a bust base is a planar loop (every zoo head cut at the neck: 0.00-0.02 of
-    the extent); a face-only capture's rim follows the face's outline round to the ears
-    (0.13-0.27), and eye or mouth holes are short loops of their own."""
-    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf}
-    if not len(rim):
-        return none
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    n = len(Vw)
-    graph = coo_matrix((np.ones(len(rim)), (rim[:, 0], rim[:, 1])), shape=(n, n))
-    _, comp = connected_components(graph, directed=False)
-    edge_comp = comp[rim[:, 0]]
-    lengths = np.bincount(edge_comp, weights=cues["rim_length"])
-    best = int(np.argmax(lengths))  # ties: the lowest label, a function of the vertex order only
-    pts = cues["rim_mid"][edge_comp == best]
-    w = cues["rim_length"][edge_comp == best]
-    mid = w @ pts / w.sum()
-    d = pts - mid
-    evals, evecs = np.linalg.eigh((d * w[:, None]).T @ d / w.sum())
-    normal = evecs[:, 0]
-    surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
-    normal = normal if (mid - surface_mid) @ normal >= 0 else -normal
-    flatness = float(np.sqrt(max(evals[0], 0.0)) / max(np.sqrt(evals[1] + evals[2]), 1e-300))
-    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness}
-
-
-def _open_shell_facing(cues):
-    """The direction an open surface faces (unit (3,)) and how open it is (its vector area over
-    its area, 0 for a closed surface, up to 1 for a flat sheet).
-
-    A closed surface's area-weighted normals sum to zero; an open one's sum to the vector area of
-    its missing cap, pointing away from the opening (or toward it, when the triangles wind inward:
-    the sign is taken from which way the surface bulges from its open rim). A neck cut leaves a small cap (ICT's full head:
-    13% of the surface's area, the bust and full heads of the shared set less), a face-only capture
-    a cap as large as its face (a head cut in half behind the ears: 28-50%, a face scan 43-64%).
-    """
-    vec = (cues["normal"] * cues["area2"][:, None]).sum(axis=0)
-    size = np.linalg.norm(vec)
-    if len(cues["rim_length"]) and cues["rim_length"].sum() > 0:
-        # the sign from the shape, not the winding (scans come with inward normals too: fran_cut):
-        # the surface bulges away from its opening
-        bulge = (cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
-                 - cues["rim_length"] @ cues["rim_mid"] / cues["rim_length"].sum())
-        vec = -vec if bulge @ vec < 0 else vec
-    return vec / max(size, 1e-300), float(size / max(cues["area2"].sum(), 1e-300))
-
-
-def _base_score(cues, up):
-    """How strongly the mesh's lowest tenth along ``up`` looks like a cut: flat area facing
-    down plus open boundary rim, relative to the whole surface."""
-    h_v = cues["heights"] @ up
-    lo, hi = h_v.min(), h_v.max()
-    bottom = (cues["centroid"] @ up - lo) / (hi - lo) < 0.1
-    flat = (cues["normal"] @ -up) > np.cos(np.radians(20))
-    area2 = cues["area2"]
-    flat_part = area2[bottom & flat].sum() / area2.sum()
-    low_rim = (cues["rim_mid"] @ up - lo) / (hi - lo) < 0.1
-    rim_part = cues["rim_length"][low_rim].sum() / np.sqrt(area2.sum() / 2)
-    return float(flat_part + 0.05 * rim_part)
 
 
 def reflect(P, normal, offset):

@@ -158,3 +158,34 @@ def test_frame_from_landmarks_agrees_with_the_head(rel):
     C = frame.to_canonical(np.array([lm["exocanthion_l"], lm["exocanthion_r"]]))
     assert C[0, 0] > 0 > C[1, 0] and abs(C[0, 0] + C[1, 0]) < 0.02
     assert frame_from_landmarks(V, F, {"exocanthion_l": lm["exocanthion_l"]}) is None
+
+
+def test_a_head_turned_at_random_in_its_file_gets_its_frame_back():
+    """Issue #31: a head turned by an arbitrary rotation (not an axis swap) and rescaled. Before, the
+    symmetry ICPs started on the input axes settled on planes that mirror ICT's head badly (0.11-0.13
+    of its RMS radius against 0.03) and the frame came out 30-100 degrees off; the planes started
+    from the sample's own principal directions find it again."""
+    V, F = load_mesh(data("ict/identity000.obj"))
+    ref = detect_frame(V, F)
+    Q = np.array([[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]])  # 37-50 deg off every axis
+    assert abs(np.linalg.det(Q) - 1) < 1e-9
+    frame = detect_frame(1000.0 * V @ Q.T, F)
+    back = frame.rotation @ Q
+    assert np.degrees(np.arccos(np.clip(back[1] @ ref.rotation[1], -1, 1))) < 15
+    assert np.degrees(np.arccos(np.clip(back[2] @ ref.rotation[2], -1, 1))) < 15
+    assert abs(back[0] @ ref.rotation[0]) > np.cos(np.radians(2))  # the same symmetry plane
+    assert frame.symmetry_error < 1.2 * ref.symmetry_error
+
+
+def test_main_cut_loop_is_the_neck_cut():
+    """The longest open-rim loop of a head cut at the neck is planar, and its normal points down
+    (away from the surface); a face-only capture's rim is not planar."""
+    from autobones.cut_cues import cut_cues
+
+    V, F = load_mesh(data("ict/identity000.obj"))
+    frame = detect_frame(V, F)
+    cues = cut_cues(V, F)
+    assert cues["loop_normal"] @ frame.rotation[1] < -0.8
+    assert cues["loop_flatness"] < 0.12
+    V, F = load_mesh(data("menpo3d/james.obj"))
+    assert cut_cues(V, F)["loop_flatness"] > 0.12

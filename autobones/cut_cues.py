@@ -1,0 +1,100 @@
+"""What a cut looks like on a head mesh: its open rim, its main cut loop, how open the surface is,
+and how much a direction's far end looks cut. Cues for :mod:`autobones.orient`'s up and front.
+
+Goes beyond the papers we implement (they take upright heads): a neck cut or a bust base marks
+the bottom, a face-only capture's opening its back. Input-frame arrays in, arrays and floats out;
+nothing here depends on the frame, so a head turned or scaled gives the same cues turned or scaled.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .geometry.normals import triangle_normals
+from .geometry.topology import used_vertices, weld
+
+
+def cut_cues(V, F):
+    """What a cut looks like, computed once: face centroids, unit normals and areas, and the
+    open rim (edges with one face, after welding by position so unwelded meshes have none
+    spurious) as midpoints and lengths."""
+    cross = triangle_normals(V, F)
+    area2 = np.linalg.norm(cross, axis=1)
+    normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
+    heights = V[used_vertices(F, len(V))]
+    Vw, Fw, _ = weld(V, F, 1e-6 * np.ptp(heights, axis=0).max())
+    # edge keys (low * n + high); an open-rim edge is one whose key occurs once
+    a, b = Fw.T.ravel(), Fw[:, [1, 2, 0]].T.ravel()
+    key = np.sort(np.minimum(a, b) * len(Vw) + np.maximum(a, b))
+    once = np.r_[True, key[1:] != key[:-1]] & np.r_[key[1:] != key[:-1], True]
+    rim = np.column_stack([key[once] // len(Vw), key[once] % len(Vw)])
+    cues = {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
+            "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
+            "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1)}
+    cues.update(_main_loop(Vw, rim, cues))
+    return cues
+
+
+def _main_loop(Vw, rim, cues):
+    """The longest open-rim loop (edges (k, 2) into welded vertices ``Vw``) as a cut: its length,
+    its best-fit plane's unit normal pointing away from the surface (toward the missing cap) and
+    how far its points stray from that plane, over the loop's RMS radius.
+
+    A neck cut or a bust base is a planar loop (every zoo head cut at the neck: 0.00-0.02 of
+    the extent); a face-only capture's rim follows the face's outline round to the ears
+    (0.13-0.27), and eye or mouth holes are short loops of their own."""
+    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf}
+    if not len(rim):
+        return none
+    n = len(Vw)
+    graph = coo_matrix((np.ones(len(rim)), (rim[:, 0], rim[:, 1])), shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    edge_comp = comp[rim[:, 0]]
+    lengths = np.bincount(edge_comp, weights=cues["rim_length"])
+    best = int(np.argmax(lengths))  # ties: the lowest label, a function of the vertex order only
+    pts = cues["rim_mid"][edge_comp == best]
+    w = cues["rim_length"][edge_comp == best]
+    mid = w @ pts / w.sum()
+    d = pts - mid
+    evals, evecs = np.linalg.eigh((d * w[:, None]).T @ d / w.sum())
+    normal = evecs[:, 0]
+    surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
+    normal = normal if (mid - surface_mid) @ normal >= 0 else -normal
+    flatness = float(np.sqrt(max(evals[0], 0.0)) / max(np.sqrt(evals[1] + evals[2]), 1e-300))
+    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness}
+
+
+def open_shell_facing(cues):
+    """The direction an open surface faces (unit (3,)) and how open it is (its vector area over
+    its area, 0 for a closed surface, up to 1 for a flat sheet).
+
+    A closed surface's area-weighted normals sum to zero; an open one's sum to the vector area of
+    its missing cap, pointing away from the opening (or toward it, when the triangles wind inward:
+    the sign is taken from which way the surface bulges from its open rim). A neck cut leaves a small cap (ICT's full head:
+    13% of the surface's area, the bust and full heads of the shared set less), a face-only capture
+    a cap as large as its face (a head cut in half behind the ears: 28-50%, a face scan 43-64%).
+    """
+    vec = (cues["normal"] * cues["area2"][:, None]).sum(axis=0)
+    size = np.linalg.norm(vec)
+    if len(cues["rim_length"]) and cues["rim_length"].sum() > 0:
+        # the sign from the shape, not the winding (scans come with inward normals too: fran_cut):
+        # the surface bulges away from its opening
+        bulge = (cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
+                 - cues["rim_length"] @ cues["rim_mid"] / cues["rim_length"].sum())
+        vec = -vec if bulge @ vec < 0 else vec
+    return vec / max(size, 1e-300), float(size / max(cues["area2"].sum(), 1e-300))
+
+
+def base_score(cues, up):
+    """How strongly the mesh's lowest tenth along ``up`` looks like a cut: flat area facing
+    down plus open boundary rim, relative to the whole surface."""
+    h_v = cues["heights"] @ up
+    lo, hi = h_v.min(), h_v.max()
+    bottom = (cues["centroid"] @ up - lo) / (hi - lo) < 0.1
+    flat = (cues["normal"] @ -up) > np.cos(np.radians(20))
+    area2 = cues["area2"]
+    flat_part = area2[bottom & flat].sum() / area2.sum()
+    low_rim = (cues["rim_mid"] @ up - lo) / (hi - lo) < 0.1
+    rim_part = cues["rim_length"][low_rim].sum() / np.sqrt(area2.sum() / 2)
+    return float(flat_part + 0.05 * rim_part)
