@@ -191,3 +191,136 @@ def test_with_jaw_moves_the_difference_to_the_head_bone():
     np.testing.assert_allclose(out[1], [0.1, 0.8, 0.1])    # the head takes
     np.testing.assert_allclose(out[2], [0.1, 0.0, 0.9])    # the head had too little: the neck gives the rest
     np.testing.assert_allclose(out[3], [0.0, 1.0, 0.0])
+
+
+# --- issue 31, check 2 ---------------------------------------------------------------------------
+# jaw >= 0.9 at pogonion / menton / labiale_inferius, <= 0.1 at pronasale / nasion / vertex (the
+# vertex nearest each given landmark), no edge off the lip line stepping by more than 0.3, on the
+# head as given and on its rotated (an arbitrary angle), x0.001, x1000 and decimated (5k) copies
+
+CHIN = ("pogonion", "menton", "labiale_inferius")
+FACE_ABOVE = ("pronasale", "nasion", "vertex")
+
+
+def _rotation(seed=31):
+    """An arbitrary rotation (3, 3) (a random unit quaternion)."""
+    w, x, y, z = (q := np.random.default_rng(seed).normal(size=4)) / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _variant(V, F, lm, how):
+    if how == "rotated":
+        R, c = _rotation(), V.mean(axis=0)
+        return (V - c) @ R.T, F, {k: (np.asarray(p) - c) @ R.T for k, p in lm.items()}
+    if how in ("x0.001", "x1000"):
+        s = float(how[1:])
+        return V * s, F, {k: np.asarray(p) * s for k, p in lm.items()}
+    if how == "decimated":
+        import fast_simplification
+
+        Vd, Fd = fast_simplification.simplify(V.astype(np.float32), F.astype(np.int32), 1 - 5000 / len(V))
+        return Vd.astype(np.float64), Fd.astype(np.int64), lm
+    return V, F, lm
+
+
+def _check2(V, F, lm, jaw):
+    """(weights at the six landmarks given: dict, worst step off the lip line, edges over 0.3); the
+    lip line both on ``V`` and on its float32 copy (a glb's): an edge counts as off it when either
+    says so."""
+    E, on = lip_line_edges(V, F, lm)
+    _, on32 = lip_line_edges(V.astype(np.float32).astype(np.float64), F, lm)
+    jump = np.abs(jaw[E[:, 0]] - jaw[E[:, 1]])[~(on & on32)]
+    at = {n: float(jaw[_nearest(V, lm[n])]) for n in CHIN + FACE_ABOVE if n in lm}
+    return at, float(jump.max()), int((jump > MAX_JUMP).sum())
+
+
+def _cow():
+    V, F = load_mesh(data("zoo/cowHead.obj"))
+    return V, F, read_landmarks(TEST_LANDMARKS / "cowHead.landmarks.json")
+
+
+@pytest.mark.parametrize("name,how", [("cow", "as given"), ("cow", "rotated"), ("cow", "x0.001"), ("cow", "x1000"),
+                                      ("goat", "rotated"), ("james", "rotated"), ("ict", "rotated"),
+                                      ("ict", "decimated"), ("ict", "as given")])
+def test_check2_chin_with_the_jaw_face_above_not_and_no_tear(name, how):
+    V, F, lm = _cow() if name == "cow" else _head(name)
+    V, F, lm = _variant(np.asarray(V, dtype=np.float64), np.asarray(F), lm, how)
+    rig = autobones.transfer((V, F), lm)
+    at, worst, over = _check2(V, F, lm, _jaw(rig))
+    # measured at 6d56e5c, before this repair: the cow stepped by 1.00 on 6 edges off its lip line as
+    # a glb stores it (float32; 3 on the rotated copy, 6 at x1000); the rotated james and ICT
+    # identity002 had jaw 0.61 and 0.89 at the menton; identity002 decimated to 5k stepped by 0.73
+    # (17 edges over 0.3); the rotated goat passed (menton 0.99)
+    assert all(at[n] >= 0.9 for n in CHIN if n in at), at
+    assert all(at[n] <= 0.1 for n in FACE_ABOVE if n in at), at
+    assert worst <= MAX_JUMP, (worst, over)
+    assert "jaw" not in rig.options   # nothing to report: the landmarks give a clean cut
+
+
+def test_cow_glb_keeps_the_lip_line(tmp_path):
+    """The cow's stomion is one of its vertices, so that vertex (and its mirror image) lies exactly
+    on the mouth plane; written to a glb (float32) its coordinates round across the plane. The jaw
+    weight read back from the file must still step only on the lip line."""
+    from autobones.io.gltf import read_accessor, read_glb
+
+    V, F, lm = _cow()
+    mouth = mouth_frame(lm)
+    on_plane = np.abs((V - mouth["stomion"]) @ mouth["normal"]) == 0
+    assert on_plane.sum() >= 2   # the stomion's vertex and its mirror image: what made the case
+    rig = autobones.transfer((V, F), lm)
+    rig.save(tmp_path / "cow.glb")
+    doc, body = read_glb(tmp_path / "cow.glb")
+    prim = doc["meshes"][0]["primitives"][0]
+    Vg = read_accessor(doc, body, prim["attributes"]["POSITION"]).astype(np.float64)
+    joints = read_accessor(doc, body, prim["attributes"]["JOINTS_0"])
+    weights = read_accessor(doc, body, prim["attributes"]["WEIGHTS_0"]).astype(np.float64)
+    jaw = (weights * (joints == rig.skeleton.names.index("jaw"))).sum(axis=1)
+    E, on_line = lip_line_edges(Vg, F, lm)
+    jump = np.abs(jaw[E[:, 0]] - jaw[E[:, 1]])[~on_line]
+    assert jump.max() <= MAX_JUMP + 1e-3, jump.max()   # was 1.00 on 6 edges
+    # the lip line itself does not move with the rounding
+    np.testing.assert_array_equal(on_line, lip_line_edges(V, F, lm)[1])
+
+
+def test_mouth_surface_bends_between_chin_and_nose_at_a_snouts_tip():
+    """A camel's lips meet at its snout's tip, ahead of the stomion: there the hand-placed pogonion
+    lies 0.02 face units above the plane of the stomion and the corners and the pronasale 0.05
+    (issue 31: the repair pinned that chin to the upper lip, jaw 0.01). The mouth surface rises
+    ahead of the stomion to pass between them; on human mouths it stays the plane."""
+    from autobones.rig_transfer.jaw_seeds import mouth_height
+
+    lm = {"stomion": [0.0, 0.0, 0.42], "cheilion_l": [0.33, 0.0, 0.0], "cheilion_r": [-0.33, 0.0, 0.0],
+          "pogonion": [0.0, 0.02, 0.49], "pronasale": [0.0, 0.046, 0.49], "nasion": [0.0, 0.45, -0.4],
+          "exocanthion_l": [0.5, 0.12, -1.1], "exocanthion_r": [-0.5, 0.12, -1.1]}
+    lm = {k: np.asarray(v) for k, v in lm.items()}
+    mouth = mouth_frame(lm)
+    assert 0.02 < mouth["lift"] < 0.046
+    h = mouth_height(np.array([lm["pogonion"], lm["pronasale"], lm["stomion"], lm["cheilion_l"]]), mouth)
+    assert h[0] < 0 < h[1] and abs(h[2]) < 1e-12 and abs(h[3]) < 1e-12
+    for name in ("ict", "james"):
+        assert mouth_frame(_head(name)[2])["lift"] == 0.0
+
+
+def test_mouth_plane_is_steady_when_the_stomion_is_on_the_corners_line():
+    """The stuffed toy's stomion lies 0.09 half-widths off the line between its mouth corners: the
+    plane through the three turned 60 degrees from the face's and took the chin for the lips. Moved
+    onto that line, a tenth of a millimetre up or down, james's mouth plane stays level."""
+    lm = read_landmarks(data("menpo3d/james.landmarks.json"))
+    ref = mouth_frame(lm)["normal"]
+    mid = 0.5 * (lm["cheilion_l"] + lm["cheilion_r"])
+    fu = face_unit(np.zeros((1, 3)), lm)
+    for dy in (-1e-3, 1e-3):
+        moved = dict(lm, stomion=mid + dy * fu * ref + 1e-3 * fu * mouth_frame(lm)["forward"])
+        n = mouth_frame(moved)["normal"]
+        assert np.degrees(np.arccos(np.clip(n @ ref, -1, 1))) < 25
+
+
+def test_a_head_without_a_lip_line_says_so(rigs):
+    """The robot has no mouth landmarks: the jaw weight may step nowhere, and its menton, two edges
+    below the nose tip, cannot be jaw 1 and fall off smoothly; the sidecar says so in one line."""
+    V, F, lm, rig = rigs("robot")
+    note = rig.options["jaw"]
+    assert "no lip line" in note and "menton" in note and "\n" not in note, note
+    assert "jaw" not in rigs("goat")[3].options

@@ -101,40 +101,37 @@ def _front_lift(landmarks, frame):
     return 0.5 * (lo + hi), at
 
 
-def _face_front(lm):
-    """(3,) a point behind the face (``opisthocranion``, else the ears' or the eye corners'
-    midpoint) and (3,) one in front (``pronasale``), or None."""
-    back = [lm[n] for n in ("opisthocranion",) if n in lm]
-    for pair in ("tragion", "superaurale", "subaurale", "exocanthion"):
-        if not back and f"{pair}_l" in lm and f"{pair}_r" in lm:
-            back = [0.5 * (lm[f"{pair}_l"] + lm[f"{pair}_r"])]
-    if not back or "pronasale" not in lm:
-        return None
-    return back[0], lm["pronasale"]
+def _face_up(lm, st):
+    """(3,) from the stomion ``st`` toward the upper face: the ``nasion`` (else the ``glabella``,
+    else the upper landmarks' mean), or None."""
+    for name in ("nasion", "glabella"):
+        if name in lm:
+            return lm[name] - st
+    hint = _up_hint(lm)
+    return None if hint is None else hint - st
 
 
 def _steady_forward(lm, st, mid, lateral, forward, normal):
     """The mouth's (forward, normal) (3,) unit each, steadied where the stomion lies almost on the
     corners' line: the plane through the three then turns about that line with every tenth of a
     millimetre (the stuffed toy's stomion is 0.09 half-widths off it; its plane was 60 degrees off
-    the face's and took the chin for the lips). Below :data:`STEADY` half-widths the face's front
-    (:func:`_face_front`, made orthogonal to the corners' line) takes over, fully at 0; human mouths
-    (0.38-0.52) and snouts (0.8-2) keep the plane of the three."""
+    the face's and took the chin for the lips). Below :data:`STEADY` half-widths the direction from
+    the stomion to the nasion (:func:`_face_up`, made orthogonal to the corners' line; 0-8 degrees
+    from the mouth plane's normal on the human heads) takes over as the normal, fully at 0; human
+    mouths (0.38-0.52 half-widths) and snouts (0.8-2) keep the plane of the three."""
     off = float(np.linalg.norm((st - mid) - ((st - mid) @ lateral) * lateral))
     half = 0.5 * float(np.linalg.norm(lm["cheilion_l"] - lm["cheilion_r"]))
     t = 1.0 - (off / (STEADY * half)) ** 2
-    ends = _face_front(lm)
-    if t <= 0 or ends is None:
+    up = _face_up(lm, st)
+    if t <= 0 or up is None:
         return forward, normal
-    front = ends[1] - ends[0]
-    front = front - (front @ lateral) * lateral
-    if np.linalg.norm(front) == 0:
+    up = up - (up @ lateral) * lateral
+    if np.linalg.norm(up) == 0:
         return forward, normal
-    front /= np.linalg.norm(front)
-    f = (1.0 - t) * forward + t * front
-    f /= np.linalg.norm(f)
-    n = np.cross(lateral, f)
-    return f, (n if n @ normal >= 0 else -n)
+    n = (1.0 - t) * normal + t * up / np.linalg.norm(up)
+    n /= np.linalg.norm(n)
+    f = np.cross(n, lateral)
+    return (f if f @ forward >= 0 else -f), n
 
 
 def mouth_frame(landmarks):

@@ -2,7 +2,7 @@
 
     python tests/data/make_test_data.py [path/to/shared/data]
 
-For each family folder (``ict``, ``menpo3d``, ``mediapipe``, ``misc``) it writes ``meshes.npz``:
+For each family folder (``ict``, ``menpo3d``, ``mediapipe``, ``misc``, ``zoo``) it writes ``meshes.npz``:
 
 - OBJ files: the ``v`` lines as an (n, 3) array, float32 when every value read back from numpy's
   shortest float32 repr equals the file's float64 value bit for bit (true of every file written with
@@ -38,6 +38,9 @@ FILES = {
     "misc": ["LeePerrySmith.obj", "demosthenes-low-res.obj", "fran_cut.obj", "fsaverage_head.obj", "goathead.obj",
              "robot_head_neutral.obj", "robot_head_Angry.obj", "robot_head_Sad.obj", "robot_head_Surprised.obj"],
 }
+# the one zoo head whose licence allows carrying it (Apache-2.0, VTK data): the jaw tests' cow
+# (its landmarks are in tests/landmarks/, outside the folders test_landmarks.py sweeps)
+FILES["zoo"] = ["cowHead.obj"]
 TRIMESH_LOADED = ["misc/LeePerrySmith.obj", "misc/robot_head_Sad.obj"]  # test_render.py, test_batch.py
 
 
