@@ -47,9 +47,15 @@ def _canonical(rig):
 
 
 def _neck_base(rig):
-    """The lowest 5 % of the neck: height from the lowest vertex to the head/neck joint."""
-    C, bottom, _, joint = _canonical(rig)
-    return C[:, 1] <= bottom + 0.05 * (joint[1] - bottom)
+    """The neck base of the zoo issue's check 3 (#31): the lowest 5 % of the vertices and the lowest
+    5 % of the height. (The lowest 5 % of the neck's height alone, bottom to joint, let a bust's neck
+    twist: its lowest 5 % of vertices spanned 17 % of its height.)"""
+    C, bottom, top, _ = _canonical(rig)
+    used = np.unique(rig.faces)
+    y = C[:, 1]
+    base = np.zeros(len(C), dtype=bool)
+    base[used] = (y[used] <= np.quantile(y[used], 0.05)) | (y[used] <= bottom + 0.05 * (top - bottom))
+    return base
 
 
 def _turn(rig, bone, degrees, axis):
@@ -134,3 +140,25 @@ def test_no_seam_steeper_than_the_heat_weights(rigs, rel):
         return np.quantile(np.abs(W[E[ok, 0]] - W[E[ok, 1]]).sum(axis=1) / length[ok], 0.999)
 
     assert steep(rig.weights) <= 1.25 * steep(heat)
+
+
+def test_head_share_is_centred_on_the_pivot_and_passes_under_the_chin():
+    """Behind the pivot the head/neck blend is centred on its height; in front the boundary descends
+    under the chin, so the chin turns with the head and the throat below it does not; the base is
+    pure neck and the skull pure head."""
+    from autobones.placement.locality import head_share
+
+    joint = np.array([0.0, 0.0, -0.2])
+    chin = (-0.3, 0.2)  # menton height, the chin's front
+    z = np.linspace(-0.45, 0.25, 8)
+    grid = np.array([[0.0, y, zz] for y in np.linspace(-0.5, 0.5, 101) for zz in z])
+    share = head_share(grid, joint, chin=chin)
+    at = lambda y, zz: share[np.argmin(np.abs(grid[:, 1] - y) + np.abs(grid[:, 2] - zz))]  # noqa: E731
+    assert at(0.0, -0.45) == pytest.approx(0.5, abs=0.05)   # behind the pivot, at its height
+    assert at(-0.12, -0.45) == 0.0 and at(0.12, -0.45) == 1.0
+    assert at(-0.28, 0.2) == 1.0                             # the chin
+    assert at(-0.45, 0.05) == 0.0                            # the throat's base
+    assert share[grid[:, 1] <= -0.45].max() == 0.0 and share[grid[:, 1] >= 0.2].min() == 1.0
+    # monotone in height at every depth: no pocket of neck inside the head
+    cols = share.reshape(101, len(z))
+    assert (np.diff(cols, axis=0) >= -1e-12).all()

@@ -88,3 +88,14 @@ def test_average_linkage_1d_matches_scipy():
         np.testing.assert_allclose(Z[-50:, 2], ref[-50:, 2], rtol=0, atol=1e-12)
         for k in range(2, 8):
             np.testing.assert_array_equal(_ordered_cut(Z, x, k), _ordered_cut(ref, x, k))
+
+
+def test_joints_recorded_with_their_cues():
+    C, F, _ = _canonical("misc/LeePerrySmith.obj")
+    seg = segment_head(C, F)
+    j = seg.joints
+    np.testing.assert_array_equal(seg.head_bone[0], j.head)
+    np.testing.assert_array_equal(seg.neck_bone[0], j.neck)
+    assert j.cues["head"] and j.cues["neck"]
+    assert seg.chin_height is None or C[:, 1].min() < seg.chin_height < j.head[1]
+    assert j.to_dict()["head"]["cues"] == j.cues["head"]

@@ -11,25 +11,35 @@ head, above the neck's narrowest section and behind the jaw's angle. On an anima
 the base of the skull between the ears, behind the jaw's hinge, where the neck enters the head.
 
 Everything here is in the canonical frame (+Y up, +Z front, +X left, head sizes) and uses cues that
-need no landmarks, each recorded in :attr:`Joints.cues` when it was used:
+need no landmarks, each recorded in :attr:`Joints.cues` (the sidecar's ``joints``) when it was used.
+The head joint (``head`` cues):
 
-- ``chin``: the menton's height, from the step of the midline profile under the chin
-  (:func:`autobones.placement.segment.segment_head`); without one, ``proportions``: the height
-  anthropometry expects (vertex-menton about 1.2 head depths, Farkas 1994);
-- ``neck_section``: the narrowest horizontal section below the chin (bounding width x depth of an
-  area-uniform sample, slab by slab), and ``neck_axis``: the line through the sections' centres
-  above it, which the pivot continues (the spine runs up the neck, a little behind its middle);
-- ``back_of_skull``: with no neck to follow (a head cut at the chin, a face mask), the pivot's depth
-  is a share of the midline section at its height, measured from the back of the head;
-- ``shoulders`` or ``bottom_cut``: the neck joint sits where the neck widens into the shoulders or
-  a bust's base, or at the mesh's cut when the neck is cut off;
-- ``face_only``: an open shell facing forward (a face mask, orient's face-only capture): the head has
-  no back and no neck to measure, and the joints are placed by the head's proportions alone.
+- ``midline_top``: the vertex is the highest point of the midline strip (horns, ears and a crest
+  beside it rise higher);
+- ``head_length``: the pivot lies ``PIVOT_DOWN`` of the head's length (the largest front-to-back
+  extent of its upper part; about vertex-menton on a human) below the vertex; or ``chin``: of the
+  height down to the chin step of the midline profile, when the mesh ends there and that is larger
+  (a tall cartoon head; above a neck a chin step may be a beard's or a throat fold's);
+- ``above_neck_base``: a long snout makes a head long, not tall, and would put the pivot in the
+  neck: it is kept ``PIVOT_FLOOR`` of the height above the bottom and ``BASE_CLEARANCE`` above the
+  neck base;
+- ``back_of_skull``: its depth is ``PIVOT_BACK`` of the section at its height from the back of the
+  head, and at most ``PIVOT_BACK_WIDTH`` of the section's width (a snout or a jaw far in front of
+  the neck lengthens the section, not the skull's base);
+- ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
+  and no neck to measure: the pivot is placed by the mask's proportions, far behind it.
 
-The proportions below were measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
-Chancey's offsets scaled by their ex-ex): the pivot lies 0.70-0.72 of vertex-menton below the vertex,
-0.32-0.35 of the midline section's depth in front of the back of the head, 0.09-0.15 of the neck's
-depth behind the neck's centre line.
+The neck joint (``neck`` cues): ``neck_section``, the neck's narrowest horizontal section under the
+pivot (bounding width of an area-uniform sample, slab by slab), then ``shoulders``, where the
+sections below it widen ``SHOULDERS`` times (a bust's chest: the neck starts there, at C7), or
+``bottom_cut``, the mesh's cut when the neck is cut off. The menton (``menton_source``: ``chin``
+from the profile, else ``proportions``, vertex-menton about 1.2 head lengths, Farkas 1994) is where
+the weights' head/neck boundary passes under the chin (:mod:`.locality`).
+
+The proportions were measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
+Chancey's offsets scaled by their ex-ex / 90 mm): the pivot lies 0.68-0.70 of the head's length
+below the vertex, 0.32-0.35 of the section's depth (0.39-0.44 of its width) in front of the back of
+the head; on them the rule lands 0.04-0.07 ex-ex from Chancey's centre.
 """
 from __future__ import annotations
 
@@ -45,10 +55,11 @@ PIVOT_BACK = 0.34        # of the section's depth at the pivot, from its back (0
 PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of its back (0.39-0.44)
 PIVOT_DOWN_MASK = 0.71   # a face mask: of its height below its top (vertex-menton: 0.70-0.72)
 PIVOT_BEHIND_MASK = 0.58  # a face mask: of its height behind its front (0.55-0.58)
+CHIN_CUT = 0.1          # of the height: a chin this close to the bottom is where the mesh ends
 MENTON_DEPTHS = 1.2    # vertex-menton in head depths, when no chin step is found (Farkas 1994)
 SLAB = 0.02            # head sizes: height of a profile slab
 MIDLINE = 0.06         # head sizes: half-width of the strip the midline profile is taken from
-UNDER_CHIN = 0.06      # head sizes: the neck's sections start this far below the menton
+UNDER_CHIN = 0.06      # head sizes: the neck's sections start this far below the pivot
 SHOULDERS = 1.5        # a section this many times the narrowest neck's width is the shoulders
 OPEN_FACE = 0.22       # vector area / area above which a forward-facing open shell is a face mask
 NECK_BASE = 0.05       # of the vertices and of the height: the neck base, kept still
@@ -67,6 +78,8 @@ class Joints:
         The menton's height used (found or expected).
     chin_front : float
         Depth of the front of the section at the menton's height (the chin's front).
+    menton_source : str
+        ``"chin"`` (the profile's step) or ``"proportions"``.
     neck_section : float or None
         Height of the neck's narrowest section, None when the mesh has no neck below the chin.
     cues : dict
@@ -77,6 +90,7 @@ class Joints:
     neck: np.ndarray
     menton: float
     chin_front: float = 0.0
+    menton_source: str = "proportions"
     neck_section: float | None = None
     cues: dict = field(default_factory=dict)
 
@@ -84,7 +98,7 @@ class Joints:
         """The sidecar's ``joints`` entry (JSON values)."""
         return {"head": {"cues": list(self.cues.get("head", []))},
                 "neck": {"cues": list(self.cues.get("neck", []))},
-                "menton_height": float(self.menton),
+                "menton_height": float(self.menton), "menton_source": self.menton_source,
                 "neck_section_height": None if self.neck_section is None else float(self.neck_section)}
 
 
@@ -140,8 +154,7 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
     bottom, top : float
         The mesh's lowest and highest heights (used vertices).
     chin : float or None
-        The menton's height from the midline profile, None when no chin step was found; recorded,
-        and the neck's sections start below it.
+        The menton's height from the midline profile, None when no chin step was found.
     face_mask : bool
         The mesh is a face-only capture (:func:`face_only`).
     base : float, optional
@@ -161,25 +174,33 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         head_cues.append("midline_top")
     length = _head_length(prof, top)
     if face_mask:
-        # no back and no neck: the mask spans about vertex (or brow) to menton
-        y_head = top - PIVOT_DOWN_MASK * height
-        z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * height
-        head_cues.append("face_only")
+        # no back to measure the head's length on: vertex-menton from the chin step, else the
+        # mask's height (a mask spans about vertex to menton); the pivot lies far behind the mask
+        scale = top - float(chin) if chin is not None else height
+        y_head = top - PIVOT_DOWN_MASK * scale
+        z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * scale
+        head_cues += ["face_only"] + (["chin"] if chin is not None else [])
     else:
-        y_head = top - PIVOT_DOWN * length
+        # the head's height scale is its length, front to back (vertex-menton is about the head's
+        # length on a human), or its height down to the chin when the mesh ends there and that is
+        # larger (a tall cartoon head); a chin step found above a neck may be a beard's or a
+        # throat fold's, and is not trusted to scale the head
+        scale = length
         head_cues.append("head_length")
+        if chin is not None and chin - bottom < CHIN_CUT * height and top - chin > length:
+            scale = top - float(chin)
+            head_cues.append("chin")
+        y_head = top - PIVOT_DOWN * scale
         base = bottom + NECK_BASE * height if base is None else float(base)
         floor = max(bottom + PIVOT_FLOOR * height, base + BASE_CLEARANCE * height)
         if y_head < floor:
             # a long snout makes the head long, not tall: the pivot stays above the neck's base
             y_head = floor
-            head_cues.append("bottom_cut")
+            head_cues.append("above_neck_base")
         z_head = _section_depth(prof, y_head)
         head_cues.append("back_of_skull")
     menton = float(chin) if chin is not None else max(top - MENTON_DEPTHS * length, bottom)
-    neck = None if face_mask else _neck(prof, min(menton, y_head), bottom)
-    if chin is not None:
-        neck_cues.append("chin")
+    neck = None if face_mask else _neck(prof, y_head, bottom)
     if neck is not None:
         y_neck, z_neck = neck["base"], neck["base_z"]
         neck_cues += ["neck_section", neck["base_cue"]]
@@ -187,7 +208,8 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         y_neck, z_neck = bottom, z_head
         neck_cues += ["face_only"] if face_mask else ["bottom_cut"]
     return Joints(head=np.array([0.0, y_head, z_head]), neck=np.array([0.0, y_neck, z_neck]), menton=menton,
-                  chin_front=_front(prof, menton), neck_section=None if neck is None else neck["height"],
+                  chin_front=_front(prof, menton), menton_source="proportions" if chin is None else "chin",
+                  neck_section=None if neck is None else neck["height"],
                   cues={"head": head_cues, "neck": neck_cues})
 
 
@@ -225,24 +247,28 @@ def _section_depth(prof, y):
 
 
 def _neck(prof, below, bottom):
-    """The neck below the head: its narrowest section and its base; None with no neck.
+    """The neck under the head: its narrowest section and its base; None with no neck.
 
-    The slabs from two slabs above the bottom (a cut's last slab is partly empty) to
-    ``UNDER_CHIN`` below ``below`` are the neck's; the narrowest (bounding width x depth) is the
-    neck's waist, and the base is where the sections below the waist widen to ``SHOULDERS`` times
-    its width (shoulders, a bust's base), or the bottom cut."""
+    The slabs from ``UNDER_CHIN`` below ``below`` (the pivot: a chin step may be wrong) down to two
+    slabs above the bottom (a cut's last slab is partly empty) are scanned downward, keeping the
+    narrowest width so far (the neck's waist); the first slab ``SHOULDERS`` times as wide is the
+    top of the shoulders (a bust's chest), where the neck starts. With none, the neck runs to the
+    bottom cut. The base's depth is its section's middle."""
     y = prof["y"]
     w, d = prof["xmax"] - prof["xmin"], prof["zmax"] - prof["zmin"]
     rows = np.flatnonzero((y < below - UNDER_CHIN) & (y > bottom + 2 * SLAB) & np.isfinite(w) & np.isfinite(d))
     if len(rows) < 2:
         return None
-    waist = int(rows[np.argmin(w[rows] * d[rows])])
-    below_waist = rows[rows < waist][::-1]
-    wide = below_waist[w[below_waist] >= SHOULDERS * w[waist]]
+    rows = rows[::-1]  # top down
+    waist = np.minimum.accumulate(w[rows])
+    wide = np.flatnonzero(w[rows][1:] >= SHOULDERS * waist[:-1]) + 1
     if len(wide):
-        base, base_cue, at = float(y[wide[0]]), "shoulders", int(wide[0]) + 1
+        k = int(wide[0])
+        at, base, base_cue = int(rows[k]), float(y[rows[k]]), "shoulders"
+        narrow = int(rows[:k][np.argmin(w[rows[:k]])])
     else:
-        base, base_cue, at = float(bottom), "bottom_cut", int(rows[0])
+        at, base, base_cue = int(rows[-1]), float(bottom), "bottom_cut"
+        narrow = int(rows[np.argmin(w[rows])])
     centre = 0.5 * (prof["zmin"][at] + prof["zmax"][at])
-    return {"height": float(y[waist]), "depth": float(d[waist]), "base": base, "base_cue": base_cue,
+    return {"height": float(y[narrow]), "depth": float(d[narrow]), "base": base, "base_cue": base_cue,
             "base_z": float(centre)}

@@ -19,8 +19,11 @@ facial bones), each step a smooth (C1) factor, so no seam appears:
    chin, so the jaw, chin and lips turn with the head and the throat stays with the neck. The
    neck base is pure neck: the share is 0 up to the higher of the lowest ``NECK_BASE`` of the
    vertices and ``NECK_BASE`` of the mesh's height, rising over the next ``NECK_RISE`` of the way
-   to the joint, so a head turn leaves it still. The neck gets the rest of each row, and the head
-   and facial bones keep the heat's proportions among themselves.
+   to the joint, so a head turn leaves it still. The face and ``FACE_HOLD`` times its band keep
+   the whole share wherever they hang (a long muzzle below any boundary through the pivot). The
+   neck gets the rest of each row; the head and facial bones keep their heat weights where these
+   sum to less than the share (the head bone takes the rest) and are scaled down alike where
+   more. Above the blend band (the top of the skull) nothing is neck.
 
 The rows stay non-negative and sum to one (each step moves weight between bones), and are pruned
 again as the heat weights were. Everything is computed per vertex in the canonical frame (head
@@ -144,7 +147,8 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         The menton's height and the chin's front depth: in front of the pivot the boundary descends
         to ``CHIN_MARGIN`` under that point (its slope kept between 0.3 and 2); default slope 1.
     face_only : bool
-        A face-only mesh: it has no neck, so no neck base is kept still (its lowest vertices are the chin).
+        A face-only mesh: its face turns with the head down to its lowest vertices (the chin of a
+        mask); a neck below the face still keeps its base still.
     face : (n,) float, optional
         1 on the facial mask falling to 0 across its band: the face turns with the head wherever
         it hangs (a long muzzle below any boundary through the pivot).
@@ -165,9 +169,10 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
     boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
-    share = smoothstep((y - boundary + half) / (2.0 * half))
+    rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+    share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
     if face is not None:
-        share = np.maximum(share, face)
-    if not face_only:
-        share *= smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+        # a face-only mesh's lowest vertices are its chin, which turns with the head; a neck's base
+        # is still even where the face's band reaches it
+        share = np.maximum(share, face if face_only else face * rise)
     return share

@@ -2,9 +2,13 @@
 
 The bone-placement method of ``place``, its §3.1: average-linkage agglomerative clustering of the head along its
 depth (canonical Z) into 3 groups; the middle group clustered again, along its
-height, into an upper and a lower part. The head bone runs vertically through
-the upper part's mean, the neck bone through the lower part's mean, parallel
-to the neck; the two are connected.
+height, into an upper and a lower part. The method runs the head bone vertically
+through the upper part's mean and the neck bone through the lower part's mean;
+that mean lands wherever the mesh's proportions put it (the brow of a long-necked
+bust), so here the groups only anchor the bones inside the volume and the joints
+are placed where the anatomy is (:mod:`.joints`, after Chancey, Ottaviano, Myers
+& Nightingale 2007): the head bone runs vertically up from the occiput-C1 pivot,
+the neck bone from the neck's base to it; the two are connected.
 
 Average linkage needs all pairwise distances (O(s^2) memory), about 70 GB for
 a 134k-vertex scan. We cluster an area-uniform surface sample of fixed size
@@ -150,12 +154,14 @@ def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean):
     head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), joint[2]])
     # keep the bones inside the volume (horns, a long muzzle, a thin neck or shoulders can put the
     # geometric ends outside): pull each end toward its part's mean until it is inside
-    Vi, Fi = (V, F) if volume is None else volume
-    joint, head_tail, neck_root = _inside(Vi, Fi, np.array([joint, head_tail, neck_root]),
-                                          np.array([head_mean, head_mean, neck_mean]))
-    # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
-    shift = _inside_shift(Vi, Fi, [(joint, head_tail), (neck_root, joint)])
-    joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
+    # (a face mask has no inside: its pivot lies behind it, in the head it does not have)
+    if "face_only" not in found.cues["head"]:
+        Vi, Fi = (V, F) if volume is None else volume
+        joint, head_tail, neck_root = _inside(Vi, Fi, np.array([joint, head_tail, neck_root]),
+                                              np.array([head_mean, head_mean, neck_mean]))
+        # a cavity (mouth, nasal or eye pocket) can still cut the line: slide the bones in depth
+        shift = _inside_shift(Vi, Fi, [(joint, head_tail), (neck_root, joint)])
+        joint, head_tail, neck_root = joint + shift, head_tail + shift, neck_root + shift
     found.head, found.neck = joint, neck_root
     return found, np.array([joint, head_tail]), np.array([neck_root, joint])
 
