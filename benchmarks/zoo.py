@@ -29,6 +29,7 @@ from and how many other variants failed (``up 47° [rot3 +2]``).
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import tempfile
 import time
@@ -46,7 +47,6 @@ import zoo_checks as zc  # noqa: E402
 
 import autobones  # noqa: E402
 from autobones.errors import AutobonesError  # noqa: E402
-from autobones.geometry.closest import closest_points  # noqa: E402
 from autobones.io.landmarks import read_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
 
@@ -64,12 +64,11 @@ FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in
 }
 HUMAN = {"human_man", "human_woman", "james", "template", "identity000", "identity001", "identity002",
          "LeePerrySmith", "demosthenes-low-res", "fran_cut"}
-ROTATIONS = 6
-VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
+VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, zc.ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
             "jitter")
 QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k")
 COLUMNS = (("0 rig", 0), ("1 frame", 1), ("2 jaw", 2), ("3 neck P", 3), ("3 neck T", 3), ("4 pivot P", 4), ("4 pivot T", 4),
-           ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("7 ARKit", 7), ("8 landmarks", 8))
+           ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("6 corr rot", 6), ("7 ARKit", 7), ("8 landmarks", 8))
 CELL_MAX = 52
 
 
@@ -90,93 +89,6 @@ def heads_in(data):
         if (data / mesh).exists():
             out[name] = (data / mesh, lm)
     return out
-
-
-# ------------------------------------------------------------------------------------- variants
-@dataclass
-class Variant:
-    name: str
-    V: np.ndarray
-    F: np.ndarray
-    lm: dict = None            # what transfer is given (jittered / snapped), variant frame
-    truth: dict = None         # the head's landmarks in the variant's frame (what checks measure against)
-    R: np.ndarray = field(default_factory=lambda: np.eye(3))   # x' = s R x
-    s: float = 1.0
-    core: np.ndarray = None    # the head's own vertices (not the stray triangle)
-    snap: bool = False         # remeshed: mapped back by closest point
-
-    def back(self, P):
-        return np.asarray(P) @ self.R / self.s
-
-
-def rotations():
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.random(ROTATIONS, random_state=31).as_matrix()
-
-
-def remesh(V, F):
-    """One Loop subdivision, then quadric decimation back to ``len(F)`` triangles (as ``arkit.py``)."""
-    import fast_simplification
-    import trimesh
-
-    Vs, Fs = trimesh.remesh.subdivide_loop(V, F, iterations=1)
-    return compact(*fast_simplification.simplify(Vs, Fs, target_count=len(F)))
-
-
-def compact(V, F):
-    keep = np.unique(F)
-    remap = -np.ones(len(V), dtype=np.int64)
-    remap[keep] = np.arange(len(keep))
-    return np.asarray(V, dtype=np.float64)[keep], remap[F]
-
-
-def decimate(V, F, vertices=5000):
-    import fast_simplification
-
-    return compact(*fast_simplification.simplify(V, F, target_count=2 * vertices))
-
-
-def snapped(lm, V, F):
-    if lm is None:
-        return None
-    names = list(lm)
-    C = closest_points(np.array([lm[n] for n in names]), V, F)[0]
-    return dict(zip(names, C))
-
-
-def make_variant(name, V, F, lm, seed):
-    """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
-    core = np.ones(len(V), dtype=bool)
-    if name == "as-is":
-        return Variant(name, V, F, lm, lm, core=core)
-    if name.startswith("rot") or name.startswith("x"):
-        R = rotations()[int(name[3:]) - 1] if name.startswith("rot") else np.eye(3)
-        s = 1.0 if name.startswith("rot") else float(name[1:])
-        tl = None if lm is None else {n: s * (R @ p) for n, p in lm.items()}
-        return Variant(name, s * V @ R.T, F, tl, tl, R=R, s=s, core=core)
-    if name in ("remesh", "dec5k"):
-        if name == "dec5k" and len(V) <= 5000:
-            return None
-        Vn, Fn = remesh(V, F) if name == "remesh" else decimate(V, F)
-        return Variant(name, Vn, Fn, snapped(lm, Vn, Fn), lm, core=np.ones(len(Vn), dtype=bool), snap=True)
-    if name == "stray":
-        size = float(np.ptp(V, axis=0).max())
-        p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
-        tri = p + 0.02 * size * np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
-        Vn = np.vstack([V, tri])
-        Fn = np.vstack([F, len(V) + np.arange(3)[None]])
-        return Variant(name, Vn, Fn, lm, lm, core=np.r_[core, np.zeros(3, dtype=bool)])
-    if name == "jitter":
-        if lm is None:
-            return None
-        rng = np.random.default_rng(seed)
-        u = zc.unit(lm, V)
-        step = rng.normal(size=(len(lm), 3))
-        step *= 0.01 * u / np.linalg.norm(step, axis=1, keepdims=True)
-        moved = snapped({n: p + d for (n, p), d in zip(lm.items(), step)}, V, F)
-        return Variant(name, V, F, moved, lm, core=core)
-    raise ValueError(name)
 
 
 # ------------------------------------------------------------------------------------- rigs and checks
@@ -246,6 +158,8 @@ def place_checks(head, var, rig, checks):
                 drift = (f"drift {deg:.1f}°" if deg >= 0.1 else f"drift {deg:.1e}°", 1 + deg)
                 fails = [] if res.status != "fail" else [(t, res.severity) for t in res.text.split(", ")]
                 res = zc.Result.of(fails + [drift])
+            elif res.status == "na":   # no landmarks: the drift is the whole check
+                res = zc.Result("ok")
         out["1 frame"] = res
     if 3 in checks:
         out["3 neck P"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
@@ -275,7 +189,8 @@ def transfer_checks(head, var, rig, details, checks):
         P0, ok0, V0, F0 = head.corr0
         p95, _ = zc.correspondence_offset(details["correspondence"], P0, ok0 & details["reliable"], V0, F0,
                                           var.back, var.snap)
-        out["6 corr"] = zc.check_correspondence(p95 / head.unit)
+        column = "6 corr" if var.snap or var.name == "stray" else "6 corr rot"
+        out[column] = zc.check_correspondence(p95 / head.unit)
     if 7 in checks and var.name == "as-is" and head.human:
         out["7 ARKit"] = guarded(zc.check_arkit, rig, var.truth, var.R @ head.up)
     return out
@@ -308,7 +223,7 @@ def rig_checks(head, var, checks, folder):
         arkit = 7 in checks and var.name == "as-is" and head.human
         trig, terr = attempt(lambda: autobones.transfer((var.V, var.F), var.lm, details=details, arkit=arkit))
         if terr is not None:
-            cells.update({c: NO_RIG for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr", "7 ARKit")})
+            cells.update({c: NO_RIG for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr", "6 corr rot", "7 ARKit")})
         elif head.up is not None:
             tc = transfer_checks(head, var, trig, details, checks)
             if "5 weights" in tc:
@@ -339,12 +254,13 @@ def landmarks_cell(head, V, F):
 
 # ------------------------------------------------------------------------------------- one head
 def run_head(name, mesh, lm_path, variants, checks):
-    """Every copy of one head: (name, {column: [(variant, Result)]}, seconds). Never raises."""
+    """Every copy of one head: (name, {column: [(variant, Result)]}, seconds, (largest frame drift in
+    degrees, its variant) or None). Never raises."""
     t = time.perf_counter()
     found = {c: [] for c, _ in COLUMNS}
     loaded, err = attempt(lambda: (load_mesh(mesh), None if lm_path is None else read_landmarks(lm_path)))
     if err is not None:
-        return name, {**{c: [] for c, _ in COLUMNS}, "0 rig": [("load", err)]}, time.perf_counter() - t
+        return name, {**{c: [] for c, _ in COLUMNS}, "0 rig": [("load", err)]}, time.perf_counter() - t, None
     (V, F), lm = loaded
     if lm is not None:
         lm = {n: np.asarray(p, dtype=np.float64) for n, p in lm.items()}
@@ -352,22 +268,24 @@ def run_head(name, mesh, lm_path, variants, checks):
     head.up = None if head.ref is None else head.ref["up"]
     with tempfile.TemporaryDirectory(prefix="zoo_") as folder:
         for vname in variants:
-            var, err = attempt(lambda: make_variant(vname, V, F, lm, zlib.crc32(name.encode())))
+            var, err = attempt(lambda: zc.make_variant(vname, V, F, lm, zlib.crc32(name.encode())))
             if var is None and err is None:
                 continue
-            cells = {"0 rig": err} if err is not None else rig_checks(head, var, checks, folder)
+            if err is None:
+                cells, err = attempt(lambda: rig_checks(head, var, checks, folder))
+            cells = {"0 rig": err} if err is not None else cells
             for c, r in cells.items():
                 if r is not None:
                     found[c].append((vname, r))
     if 8 in checks and head.human:
         found["8 landmarks"].append(("as-is", landmarks_cell(head, V, F)))
     if lm is None:
-        for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr"):
+        for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr", "6 corr rot"):
             found[c] = [("as-is", zc.na("no landmarks"))]
-    if head.drift:
-        deg, vname = max(head.drift)
-        log(f"  {name}: frame drift over rotated / scaled copies {deg:.3g}° ({vname})")
-    return name, found, time.perf_counter() - t
+    drift = max(head.drift) if head.drift else None
+    if drift:
+        log(f"  {name}: frame drift over rotated / scaled copies {drift[0]:.3g}° ({drift[1]})")
+    return name, found, time.perf_counter() - t, drift
 
 
 def summarise(results):
@@ -399,19 +317,23 @@ def summarise(results):
 
 
 def error_notes(done):
-    """One line per head and distinct refusal / error message, with the rigs and variants it came from."""
-    out = []
-    for name, found, _ in done:
-        seen = {}
+    """One line per distinct refusal / error message (numbers aside), with the heads, rigs and variants."""
+    seen = {}
+    for name, found, _, _ in done:
         for results in found.values():
             for v, r in results:
                 for lab, msg in (r.notes if r is not None else ()):
-                    labs, vs = seen.setdefault(msg, (set(), []))
+                    rec = seen.setdefault(re.sub(r"\d+(\.\d+)?", "#", msg), {"msg": msg, "heads": {}})
+                    labs, vs = rec["heads"].setdefault(name, (set(), []))
                     labs.add(lab)
-                    if v not in vs:
-                        vs.append(v)
-        out += [f"{name} {'/'.join(sorted(labs - {''})) + ' ' if labs - {''} else ''}[{', '.join(vs)}]: {msg}"
-                for msg, (labs, vs) in seen.items()]
+                    vs.append(v) if v not in vs else None
+    out = []
+    for rec in seen.values():
+        where = ", ".join(f"{n}{' ' + '/'.join(sorted(labs - {''})) if labs - {''} else ''} [{', '.join(vs)}]"
+                          for n, (labs, vs) in rec["heads"].items())
+        many = len(rec["heads"]) > 1
+        out.append(f"{len(rec['heads'])} heads: {where}: {rec['msg']}" + (" (figures of the first)" if many else "")
+                   if many else f"{where}: {rec['msg']}")
     return out
 
 
@@ -488,7 +410,7 @@ def main(argv=None):
     else:
         done = [run_head(*job) for job in jobs]
     rows, raw = [], []
-    for name, found, seconds in done:
+    for name, found, seconds, _ in done:
         log(f"{name}: {seconds:.1f} s")
         rows.append((name, {c: summarise(found[c]) if applies(c, name, checks) else None for c, _ in COLUMNS}))
         raw.extend(found[c] for c, _ in COLUMNS if applies(c, name, checks))
@@ -498,6 +420,11 @@ def main(argv=None):
     if notes:
         print("\n" + "\n".join(("- " if args.markdown else "") + n for n in notes))
     print("\n" + summary_line(rows, raw))
+    drifts = [(d[0], n, d[1]) for n, _, _, d in done if d]
+    if drifts:
+        ok = [n for d, n, _ in drifts if d * np.pi / 180 <= zc.DRIFT]
+        print(f"frame drift of the rotated / scaled copies: {len(ok)}/{len(drifts)} heads within 1e-6; largest "
+              + ", ".join(f"{n} {d:.3g}° ({v})" for d, n, v in sorted(drifts, reverse=True)[:3]))
     print(f"{len(heads)} heads, variants {', '.join(variants)}; {time.perf_counter() - t:.0f} s")
 
 

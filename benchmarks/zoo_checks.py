@@ -1,4 +1,4 @@
-"""The checks of ``benchmarks/zoo.py`` (issue #31): measures that need no ground truth.
+"""The copies of a head and the checks of ``benchmarks/zoo.py`` (issue #31): measures that need no ground truth.
 
 Each ``check_*`` function takes a rig (or two) and the head's reference geometry and returns a
 :class:`Result`: ``ok``, ``fail`` with the failing figure (``"up 47°"``, ``"chin 0.01"``), ``na``
@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +25,7 @@ from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges
 ROOT = Path(__file__).resolve().parents[1]
 VALIDATOR_DIR = ROOT / "tools" / "gltf-validator"
 
+ROTATIONS = 6              # random rotations (scipy, seed 31)
 FRAME_DEG = 30.0           # check 1: front / up within this of the landmarks'
 DRIFT = 1e-6               # check 1: frame of a rotated / scaled copy vs the as-is one (rotation entries)
 JAW_ON, JAW_OFF = 0.9, 0.1  # check 2
@@ -40,6 +41,94 @@ JAW_PROBES = (("pogonion", "chin", True), ("menton", "chin", True), ("labiale_in
               ("pronasale", "nose", False), ("nasion", "nasion", False), ("vertex", "vertex", False))
 
 
+# ------------------------------------------------------------------------------------- copies of a head
+@dataclass
+class Variant:
+    name: str
+    V: np.ndarray
+    F: np.ndarray
+    lm: dict = None            # what transfer is given (jittered / snapped), variant frame
+    truth: dict = None         # the head's landmarks in the variant's frame (what checks measure against)
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))   # x' = s R x
+    s: float = 1.0
+    core: np.ndarray = None    # the head's own vertices (not the stray triangle)
+    snap: bool = False         # remeshed: mapped back by closest point
+
+    def back(self, P):
+        return np.asarray(P) @ self.R / self.s
+
+
+def rotations():
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.random(ROTATIONS, random_state=31).as_matrix()
+
+
+def remesh(V, F):
+    """One Loop subdivision, then quadric decimation back to ``len(F)`` triangles (as ``arkit.py``)."""
+    import fast_simplification
+    import trimesh
+
+    Vs, Fs = trimesh.remesh.subdivide_loop(V, F, iterations=1)
+    return compact(*fast_simplification.simplify(Vs, Fs, target_count=len(F)))
+
+
+def compact(V, F):
+    keep = np.unique(F)
+    remap = -np.ones(len(V), dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    return np.asarray(V, dtype=np.float64)[keep], remap[F]
+
+
+def decimate(V, F, vertices=5000):
+    import fast_simplification
+
+    return compact(*fast_simplification.simplify(V, F, target_count=2 * vertices))
+
+
+def snapped(lm, V, F):
+    if lm is None:
+        return None
+    names = list(lm)
+    C = closest_points(np.array([lm[n] for n in names]), V, F)[0]
+    return dict(zip(names, C))
+
+
+def make_variant(name, V, F, lm, seed):
+    """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
+    core = np.ones(len(V), dtype=bool)
+    if name == "as-is":
+        return Variant(name, V, F, lm, lm, core=core)
+    if name.startswith("rot") or name.startswith("x"):
+        R = rotations()[int(name[3:]) - 1] if name.startswith("rot") else np.eye(3)
+        s = 1.0 if name.startswith("rot") else float(name[1:])
+        tl = None if lm is None else {n: s * (R @ p) for n, p in lm.items()}
+        return Variant(name, s * V @ R.T, F, tl, tl, R=R, s=s, core=core)
+    if name in ("remesh", "dec5k"):
+        if name == "dec5k" and len(V) <= 5000:
+            return None
+        Vn, Fn = remesh(V, F) if name == "remesh" else decimate(V, F)
+        return Variant(name, Vn, Fn, snapped(lm, Vn, Fn), lm, core=np.ones(len(Vn), dtype=bool), snap=True)
+    if name == "stray":
+        size = float(np.ptp(V, axis=0).max())
+        p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+        tri = p + 0.02 * size * np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        Vn = np.vstack([V, tri])
+        Fn = np.vstack([F, len(V) + np.arange(3)[None]])
+        return Variant(name, Vn, Fn, lm, lm, core=np.r_[core, np.zeros(3, dtype=bool)])
+    if name == "jitter":
+        if lm is None:
+            return None
+        rng = np.random.default_rng(seed)
+        u = unit(lm, V)
+        step = rng.normal(size=(len(lm), 3))
+        step *= 0.01 * u / np.linalg.norm(step, axis=1, keepdims=True)
+        moved = snapped({n: p + d for (n, p), d in zip(lm.items(), step)}, V, F)
+        return Variant(name, V, F, moved, lm, core=core)
+    raise ValueError(name)
+
+
+# ------------------------------------------------------------------------------------- results
 @dataclass
 class Result:
     status: str                # ok, fail, na, error, refused
