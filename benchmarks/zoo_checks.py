@@ -286,7 +286,7 @@ def check_neck_base(rig, up, core, chin=None):
     if not peak > 0:
         return Result("fail", "head turn moves nothing", 1.0)
     lo_count = h <= np.quantile(h, BASE_SHARE)
-    if chin is not None and (h < chin).any():
+    if chin is not None and (lo_count & (h < chin)).any():
         lo_count &= h < chin
     lo_height = h <= h.min() + BASE_SHARE * np.ptp(h)
     fails = []
