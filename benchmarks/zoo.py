@@ -153,7 +153,7 @@ def place_checks(head, var, rig, checks):
         res = zc.check_frame(rig, ref)
         if var.name.startswith(("rot", "x")) and head.rotation0 is not None:
             entries, deg = zc.frame_drift(rig.frame.rotation, head.rotation0, var.R)
-            head.drift.append((deg, var.name))
+            head.drift.append((deg, var.name, entries))
             if entries > zc.DRIFT:
                 drift = (f"drift {deg:.1f}°" if deg >= 0.1 else f"drift {deg:.1e}°", 1 + deg)
                 fails = [] if res.status != "fail" else [(t, res.severity) for t in res.text.split(", ")]
@@ -422,7 +422,7 @@ def main(argv=None):
     print("\n" + summary_line(rows, raw))
     drifts = [(d[0], n, d[1]) for n, _, _, d in done if d]
     if drifts:
-        ok = [n for d, n, _ in drifts if d * np.pi / 180 <= zc.DRIFT]
+        ok = [n for n, _, _, d in done if d and d[2] <= zc.DRIFT]
         print(f"frame drift of the rotated / scaled copies: {len(ok)}/{len(drifts)} heads within 1e-6; largest "
               + ", ".join(f"{n} {d:.3g}° ({v})" for d, n, v in sorted(drifts, reverse=True)[:3]))
     print(f"{len(heads)} heads, variants {', '.join(variants)}; {time.perf_counter() - t:.0f} s")
