@@ -19,9 +19,9 @@ Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
   the vertices ("base") and of the height ("base(h)") move <= 1% of the peak. 4 pivot (P, T): head joint
   behind the gonions, below the tragions, above the neck's base, on the midline (0.02 ex-ex); humans with
   tragions: within 0.15 ex-ex of the occiput-C1 centre. 5 weights (P, T): weighted, sum 1, no NaN;
-  glTF: the Khronos validator's errors (as-is only). 6 correspondence (T): p95 offset of the generic
-  vertices' points on each copy (mapped back; by closest point on remeshed ones) from the as-is ones
-  <= 1% ex-ex (jittered copies excluded). 7 ARKit (humans, as-is): no triangle turned over, eyeBlinkLeft
+  glTF: the Khronos validator's errors (as-is only). 6 corr (T): p95 offset of the generic vertices'
+  points on the remeshed / decimated / stray copies (mapped back by closest point) from the as-is ones
+  <= 1% ex-ex; "6 corr rot" the same on rotated and scaled copies (mapped back exactly). 7 ARKit (humans, as-is): no triangle turned over, eyeBlinkLeft
   closes >= 90% of the lid gap. 8 landmarks (humans, as-is): automatic detection runs.
 A cell: ``ok``, ``n/a: why``, ``-`` (not applicable), or the worst failing figure with the variant it came
 from and how many other variants failed (``up 47° [rot3 +2]``).
@@ -393,8 +393,11 @@ def main(argv=None):
         if unknown:
             ap.error(f"unknown heads {', '.join(unknown)}; known: {', '.join(heads)}")
         heads = {h: heads[h] for h in wanted}
-    checks = ({int(c) for c in args.checks.split(",")} if args.checks else
-              set(range(1, 6)) if args.quick else set(range(1, 9)))
+    try:
+        checks = ({int(c) for c in args.checks.split(",")} if args.checks else
+                  set(range(1, 6)) if args.quick else set(range(1, 9)))
+    except ValueError:
+        ap.error(f"--checks {args.checks}: expected numbers 1-8, comma-separated")
     variants = tuple(args.variants.split(",")) if args.variants else QUICK if args.quick else VARIANTS
     bad = [v for v in variants if v not in VARIANTS]
     if bad:
