@@ -44,7 +44,7 @@ def _main_loop(Vw, rim, cues):
     A neck cut or a bust base is a planar loop (every zoo head cut at the neck: 0.00-0.02 of
     the extent); a face-only capture's rim follows the face's outline round to the ears
     (0.13-0.27), and eye or mouth holes are short loops of their own."""
-    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf}
+    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf, "loop_centre": None}
     if not len(rim):
         return none
     n = len(Vw)
@@ -62,7 +62,7 @@ def _main_loop(Vw, rim, cues):
     surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
     normal = normal if (mid - surface_mid) @ normal >= 0 else -normal
     flatness = float(np.sqrt(max(evals[0], 0.0)) / max(np.sqrt(evals[1] + evals[2]), 1e-300))
-    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness}
+    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness, "loop_centre": mid}
 
 
 def open_shell_facing(cues):
@@ -98,3 +98,34 @@ def base_score(cues, up):
     low_rim = (cues["rim_mid"] @ up - lo) / (hi - lo) < 0.1
     rim_part = cues["rim_length"][low_rim].sum() / np.sqrt(area2.sum() / 2)
     return float(flat_part + 0.05 * rim_part)
+
+
+def is_planar_cut(cues, min_length=0.5, max_flatness=0.12):
+    """Whether the main rim loop is a planar cut long enough to be a neck cut or a bust base: at
+    least ``min_length`` times the square root of the surface's area (the zoo's neck cuts: 0.9-3.2,
+    an eye hole far less) and no further from its plane than ``max_flatness`` of its radius (neck
+    cuts 0.00-0.05, ICT's 0.08-0.09; face-only captures' outlines 0.17-0.32)."""
+    if cues["loop_normal"] is None:
+        return False
+    area = cues["area2"].sum() / 2.0
+    return cues["loop_length"] >= min_length * np.sqrt(area) and cues["loop_flatness"] < max_flatness
+
+
+def cut_up_front(P, normal, offset, cues, slab=0.02):
+    """Up and front (unit (3,), input frame) from a planar neck cut, for a head that looks like no
+    human face: up is the cut's far side turned into the symmetry plane ``normal . x = offset``;
+    front is the way the midline profile (sample points ``P`` within ``slab`` of the plane, in
+    head sizes) reaches farther past the cut's centre. Every vertebrate's spine enters the skull
+    at its base, behind the jaw, so the face or snout overhangs the neck farther than the back of
+    the skull does (zoo animals with the landmarks' frame: 0.52-0.74 of the two reaches). Also
+    returns that share (0.5-1), how clear the front was."""
+    d = cues["loop_normal"]
+    up = -d + (d @ normal) * normal
+    up /= np.linalg.norm(up)
+    front = np.cross(normal, up)
+    size = np.ptp(P, axis=0).max()
+    profile = P[np.abs(P @ normal - offset) < slab * size]
+    reach = (profile - cues["loop_centre"]) @ front
+    ahead, behind = max(reach.max(), 0.0), max(-reach.min(), 0.0)
+    share = ahead / max(ahead + behind, 1e-300)
+    return (up, front, share) if share >= 0.5 else (up, -front, 1.0 - share)

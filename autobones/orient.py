@@ -47,6 +47,7 @@ from .errors import AutobonesError
 from .geometry.sample import sample_surface
 from .geometry.topology import used_vertices
 from .cut_cues import base_score as _base_score, cut_cues as _cut_cues, open_shell_facing as _open_shell_facing
+from .cut_cues import cut_up_front, is_planar_cut
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
@@ -70,6 +71,13 @@ SHAPE_PLANE_GAIN = 0.8
 # ... and they are tried only when that best mirrors the head worse than this (its sample's RMS radii):
 # true planes measure 0.024-0.053 on the shared and zoo heads, the trapped ones 0.11-0.13
 SHAPE_PLANE_ABOVE = 0.06
+# the reference head's overlay score (trimmed distances in RMS radii) above which a head is not taken
+# for a human face: human heads and busts of the shared and zoo sets score 0.08-0.12 in their true
+# frame, the zoo's animals and cartoons 0.13-0.46
+HUMAN_LIKE = 0.13
+# the same for a head taken for a face-only capture (scored against the reference's front part): the
+# shared heads' front halves and quarters score 0.08-0.25, the zoo's wide-necked beast 0.30
+FACE_UNLIKE = 0.28
 
 
 @dataclass(frozen=True)
@@ -187,48 +195,24 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             candidates = _candidates(normal, up_v, front_v)
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
-    shaped = up_v is None and front_v is None and np.abs(normal).max() < AUTHORED
-    if shaped and cues["loop_normal"] is not None:
-        # the main cut's far side is the bottom (a neck cut, a bust base) or the back (a face-only
-        # capture), or between (a neck cut slanted down and back)
-        d = cues["loop_normal"]
-        candidates = [(u, f) for u, f in candidates
-                      if max(-(d @ u), -(d @ f)) > 0.3 and d @ u < 0.3 and d @ f < 0.3] or candidates
-    elif len(candidates) > 1 and up_v is None:
-        # a flat cut or an open rim (neck, bust base) marks the bottom when one is clear
-        bases = {}
+    face_only = False
+    if len(candidates) > 1 and up_v is None:
         cues = _cut_cues(V, F) if cues is None else cues
-        facing, openness = _open_shell_facing(cues)
-        mask = [(u, f) for u, f in candidates if f @ facing > 0.7]
-        for u, _ in candidates:
-            key = tuple(np.round(u, 6))
-            if key not in bases:
-                bases[key] = _base_score(cues, u)
-        ranked = sorted(bases.values(), reverse=True)
-        winner = max(bases, key=bases.get) if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1] else None
-        # a face-only capture faces away from its opening, which is its back, not its bottom: a shell
-        # open that wide, or one whose clear "cut" lies opposite the way it faces
-        if mask and (openness > FACE_SHELL or (openness > OPEN_SHELL and winner is not None
-                                               and np.array(winner) @ facing > 0.7)):
-            candidates = mask
-            # scored against as deep a front part of the reference head
-            depth = np.ptp(P @ facing) / max(np.ptp(P @ normal), 1e-300)
-            z = ref[:, 2]
-            front_part = ref[z >= z.max() - depth * np.ptp(ref[:, 0])]
-            ref = front_part if len(front_part) >= 0.1 * len(ref) else ref
-        elif winner is not None:
-            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner]
-        elif len(ranked) > 2 and ranked[1] > 0.02 and ranked[1] > 1.5 * ranked[2]:
-            # two directions look cut (a neck cut slanted down and back shows at the bottom and at the
-            # back): the bottom is one of them, and only their candidates are scored
-            pair = sorted(bases, key=bases.get, reverse=True)[:2]
-            candidates = [(u, f) for u, f in candidates if tuple(np.round(u, 6)) in pair]
+        candidates, ref, face_only = _cut_candidates(P, normal, candidates, cues, ref)
     if len(candidates) > 1:
         # independent ICPs whose time is in the k-d tree queries, which release the GIL: threads
         # give the same scores in about half the time on two cores
         with ThreadPoolExecutor(max_workers=min(len(candidates), os.cpu_count() or 1)) as pool:
             scores = list(pool.map(lambda c: _overlay_score(P, c[0], c[1], ref), candidates))
         up_d, front_d = candidates[int(np.argmin(scores))]
+        if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
+            # candidates 30 degrees apart round a turned head: settle the angle between them
+            up_d, front_d = _refine_angle(P, normal, up_d, front_d, ref)
+        if (up_v is None and front_v is None and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE)
+                and is_planar_cut(cues)):
+            # no human face matches (an animal, a cartoon): the reference head cannot tell its
+            # front from its back, the neck cut can
+            up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
     else:
         up_d, front_d = candidates[0]
     # an exact frame from the refined symmetry normal and the chosen up, in an order that does
@@ -242,6 +226,73 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
+
+
+def _refine_angle(P, normal, up, front, ref, half=15.0, evaluations=8):
+    """(up, front) turned about the symmetry ``normal`` by the angle within +-``half`` degrees
+    that overlays the reference best (the overlay held at that turn: a golden-section search on a
+    score that is smooth in the angle), for candidates spaced ``2 * half`` degrees apart."""
+    def turned(t):
+        c, s = np.cos(np.radians(t)), np.sin(np.radians(t))
+        side = np.cross(normal, up) * np.sign(np.cross(normal, up) @ front)
+        return c * up + s * side, c * front - s * up
+
+    def score(t):
+        u, f = turned(t)
+        return _overlay_score(P, u, f, ref, max_turn=0.0)
+
+    g = (np.sqrt(5.0) - 1.0) / 2.0
+    a, b = -half, half
+    x1, x2 = b - g * (b - a), a + g * (b - a)
+    f1, f2 = score(x1), score(x2)
+    for _ in range(evaluations - 2):
+        if f1 <= f2:
+            b, x2, f2 = x2, x1, f1
+            x1 = b - g * (b - a)
+            f1 = score(x1)
+        else:
+            a, x1, f1 = x1, x2, f2
+            x2 = a + g * (b - a)
+            f2 = score(x2)
+    return turned(x1 if f1 <= f2 else x2)
+
+
+def _cut_candidates(P, normal, candidates, cues, ref):
+    """The (up, front) candidates a cut allows, the reference to score them against, and whether
+    the head was taken for a face-only capture. A flat cut or an open rim (neck, bust base) marks
+    the bottom when one is clear; a face-only capture faces away from its opening, which is its
+    back, not its bottom: a shell open that wide, or one whose clear "cut" lies opposite the way it
+    faces (then only the fronts along that way stay, scored against as deep a front part of the
+    reference head)."""
+    bases = {}
+    facing, openness = _open_shell_facing(cues)
+    mask = [(u, f) for u, f in candidates if f @ facing > 0.7]
+    for u, _ in candidates:
+        key = tuple(np.round(u, 6))
+        if key not in bases:
+            bases[key] = _base_score(cues, u)
+    ranked = sorted(bases.values(), reverse=True)
+    winner = max(bases, key=bases.get) if ranked[0] > 0.02 and ranked[0] > 2.0 * ranked[1] else None
+    if mask and (openness > FACE_SHELL or (openness > OPEN_SHELL and winner is not None
+                                           and np.array(winner) @ facing > 0.7)):
+        depth = np.ptp(P @ facing) / max(np.ptp(P @ normal), 1e-300)
+        z = ref[:, 2]
+        front_part = ref[z >= z.max() - depth * np.ptp(ref[:, 0])]
+        return mask, (front_part if len(front_part) >= 0.1 * len(ref) else ref), True
+    if winner is not None:
+        return [(u, f) for u, f in candidates if tuple(np.round(u, 6)) == winner], ref, False
+    if len(ranked) > 2 and ranked[1] > 0.02 and ranked[1] > 1.5 * ranked[2]:
+        # two directions look cut (a neck cut slanted down and back shows at the bottom and at the
+        # back): the bottom is one of them, and only their candidates are scored
+        pair = sorted(bases, key=bases.get, reverse=True)[:2]
+        return [(u, f) for u, f in candidates if tuple(np.round(u, 6)) in pair], ref, False
+    if is_planar_cut(cues):
+        # a planar cut's far side is the bottom (a neck cut, a bust base) or the back (a face-only
+        # capture), or between (a neck cut slanted down and back)
+        d = cues["loop_normal"]
+        kept = [(u, f) for u, f in candidates if max(-(d @ u), -(d @ f)) > 0.3 and d @ u < 0.3 and d @ f < 0.3]
+        return kept or candidates, ref, False
+    return candidates, ref, False
 
 
 def _symmetry_plane(V, F, P, tree, rms, up_v, front_v):
