@@ -117,8 +117,10 @@ def cut_up_front(P, normal, offset, cues, slab=0.02):
     front is the way the midline profile (sample points ``P`` within ``slab`` of the plane, in
     head sizes) reaches farther past the cut's centre. Every vertebrate's spine enters the skull
     at its base, behind the jaw, so the face or snout overhangs the neck farther than the back of
-    the skull does (zoo animals with the landmarks' frame: 0.52-0.74 of the two reaches). Also
-    returns that share (0.5-1), how clear the front was."""
+    the skull does (zoo animals with the landmarks' frame: 0.52-0.74 of the two reaches). Then
+    front turns onto the line from the profile's most posterior point to its most anterior one,
+    clear of the neck (as opisthocranion -> pronasale), and up with it. Also returns that share
+    (0.5-1), how clear the front was."""
     d = cues["loop_normal"]
     up = -d + (d @ normal) * normal
     up /= np.linalg.norm(up)
@@ -128,4 +130,15 @@ def cut_up_front(P, normal, offset, cues, slab=0.02):
     reach = (profile - cues["loop_centre"]) @ front
     ahead, behind = max(reach.max(), 0.0), max(-reach.min(), 0.0)
     share = ahead / max(ahead + behind, 1e-300)
-    return (up, front, share) if share >= 0.5 else (up, -front, 1.0 - share)
+    front, share = (front, share) if share >= 0.5 else (-front, 1.0 - share)
+    # the landmarks' own front, opisthocranion -> pronasale: the profile's most anterior and most
+    # posterior points clear of the neck (a cut slants with the neck: the cow's by 39 degrees)
+    head = profile[(profile - cues["loop_centre"]) @ -d > 0.1 * size]
+    if len(head) >= 2:
+        chord = head[np.argmax(head @ front)] - head[np.argmin(head @ front)]
+        chord -= (chord @ normal) * normal
+        if np.linalg.norm(chord) > 0:
+            front = chord / np.linalg.norm(chord)
+            up = np.cross(front, normal)
+            up *= np.sign(up @ -d) or 1.0
+    return up, front, share

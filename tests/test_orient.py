@@ -189,3 +189,35 @@ def test_main_cut_loop_is_the_neck_cut():
     assert cues["loop_flatness"] < 0.12
     V, F = load_mesh(data("menpo3d/james.obj"))
     assert cut_cues(V, F)["loop_flatness"] > 0.12
+
+
+def _landmark_frame(path, V):
+    """(up, front) of a landmark file as issue #31 defines them: front opisthocranion (else the
+    tragions' midpoint, else the centroid of ``V``) -> pronasale, up menton -> vertex made
+    orthogonal to it."""
+    import json
+
+    L = {k: np.asarray(v, float) for k, v in json.loads(path.read_text())["landmarks"].items()}
+    back = L.get("opisthocranion", (L["tragion_l"] + L["tragion_r"]) / 2 if "tragion_l" in L else V.mean(axis=0))
+    front = L["pronasale"] - back
+    front /= np.linalg.norm(front)
+    up = L["vertex"] - L["menton"]
+    up -= (up @ front) * front
+    return up / np.linalg.norm(up), front
+
+
+@pytest.mark.parametrize("turn", [None, (0.36, 0.48, -0.8, -0.8, 0.6, 0.0, 0.48, 0.64, 0.6)])
+def test_an_animal_cut_at_the_neck_stands_on_its_cut_and_faces_its_snout(turn):
+    """Issue #31: the cow (VTK's cowHead) was rigged upside down (up 155 deg off its landmarks'). No
+    human face fits it, so its up comes from its neck cut and its front from the snout's reach past
+    the cut, turned onto the line from the back of the skull to the muzzle: within 30 deg of its
+    landmarks' frame, as is and turned off every axis."""
+    from pathlib import Path
+
+    V, F = load_mesh(data("zoo/cowHead.obj"))
+    up, front = _landmark_frame(Path(__file__).parent / "landmarks" / "cowHead.landmarks.json", V)
+    Q = np.eye(3) if turn is None else np.array(turn).reshape(3, 3)
+    frame = detect_frame(V @ Q.T, F)
+    back = frame.rotation @ Q
+    assert np.degrees(np.arccos(np.clip(back[1] @ up, -1, 1))) < 30
+    assert np.degrees(np.arccos(np.clip(back[2] @ front, -1, 1))) < 30
