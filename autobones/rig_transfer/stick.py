@@ -86,8 +86,78 @@ def stick(V_src, F_src, V_tgt, F_tgt, max_angle=60.0, min_area_ratio=0.01, label
     if face_labels is not None and len(face_labels) != len(F_tgt):
         raise AutobonesError(f"face_labels: {len(face_labels)} values for {len(F_tgt)} target faces")
     P, face, bary, _ = closest_points(V_src, V_tgt, F_tgt, labels, face_labels)
+    face, bary = facing_face(P, face, bary, V_tgt, F_tgt, vertex_normals(V_src, F_src), face_labels)
     reliable = fold_free(V_src, F_src, P, V_tgt, F_tgt, face, max_angle, min_area_ratio)
     return P, face, bary, reliable
+
+
+# a closest point whose barycentric coordinate is below ON_EDGE lies on the face's edge or corner
+# (dimensionless: the same in any unit and frame)
+ON_EDGE = 1e-9
+
+
+def facing_face(P, face, bary, V, F, normals, face_labels=None):
+    """Settle a closest point on an edge or a corner of the mesh: of the faces sharing it, the one
+    whose normal is nearest the query's.
+
+    Such a point belongs to every face around that edge or corner, and which one a closest-point
+    search reports is decided by rounding (a copy of the head at x1000, or turned, picks another);
+    on a fold the faces there face opposite ways, so the normal checks downstream (the stick's fold
+    test, the field copy's reliability) flipped with the units. Ties among equally facing faces go
+    to the lowest face index.
+
+    Parameters
+    ----------
+    P : (k, 3) float
+        The closest points, on the mesh (its units).
+    face : (k,) int
+        Face reported for each.
+    bary : (k, 3) float
+        Barycentric coordinates of ``P`` in ``face``.
+    V, F : (n, 3) float, (m, 3) int
+        The mesh.
+    normals : (k, 3) float
+        Unit normal of each query.
+    face_labels : (m,) int, optional
+        Part of each face: the face stays in the part it was found in.
+
+    Returns
+    -------
+    face : (k,) int64
+    bary : (k, 3) float64
+        Coordinates of the same points in the faces kept.
+    """
+    from ..geometry.closest import barycentric
+
+    face, bary = np.asarray(face, dtype=np.int64).copy(), np.asarray(bary, dtype=np.float64).copy()
+    F = np.asarray(F, dtype=np.int64)
+    support = bary > ON_EDGE
+    q = np.flatnonzero(support.sum(axis=1) < 3)
+    if not len(q):
+        return face, bary
+    # candidates: the faces around each point's strongest corner that also hold its other support corner
+    lead = F[face[q], np.argmax(bary[q], axis=1)]
+    other = np.where(support[q].sum(axis=1) == 2, F[face[q], np.argsort(bary[q], axis=1)[:, 1]], lead)
+    order = np.argsort(F.ravel(), kind="stable")
+    start = np.searchsorted(F.ravel()[order], np.arange(len(V) + 1))
+    count = start[lead + 1] - start[lead]
+    row = np.repeat(np.arange(len(q)), count)
+    at = np.arange(len(row)) - np.repeat(np.cumsum(count) - count, count)
+    cand = order[start[lead][row] + at] // 3
+    keep = (F[cand] == other[row, None]).any(axis=1)
+    if face_labels is not None:
+        keep &= np.asarray(face_labels)[cand] == np.asarray(face_labels)[face[q]][row]
+    row, cand = row[keep], cand[keep]
+    FN = triangle_normals(V, F[cand])
+    FN /= np.maximum(np.linalg.norm(FN, axis=1, keepdims=True), 1e-300)
+    score = np.einsum("ij,ij->i", np.asarray(normals, dtype=np.float64)[q[row]], FN)
+    best = np.lexsort((cand, -score, row))          # per query: best score, then lowest index
+    first = best[np.r_[True, row[best][1:] != row[best][:-1]]]
+    hit = q[row[first]]
+    face[hit] = cand[first]
+    T = np.asarray(V, dtype=np.float64)[F[face[hit]]]
+    bary[hit] = barycentric(np.asarray(P, dtype=np.float64)[hit], T[:, 0], T[:, 1], T[:, 2])
+    return face, bary
 
 
 def fold_free(V_before, F_src, V_after, V_tgt, F_tgt, face, max_angle=60.0, min_area_ratio=0.01):
