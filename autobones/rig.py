@@ -349,7 +349,8 @@ class Rig:
                     temps.append(tmp)
                 write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
                           extras={"autobones": {"sidecar": os.path.basename(json_path)}},
-                          markers=self.muscle_markers(), morph_targets=morphs)
+                          markers=self.muscle_markers(), morph_targets=morphs,
+                          axes=self.frame.rotation)  # the joints' roll from the head's own frame
                 with open(temps[1], "w") as fh:
                     fh.write(strict_dumps(side, indent=1))  # strict JSON: an undefined value is null, never NaN
                 with open(temps[2], "wb") as fh:

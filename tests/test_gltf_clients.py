@@ -360,7 +360,7 @@ def _random_skeleton(rng, n_bones):
     parents = np.array([-1] + [int(rng.integers(0, i)) for i in range(1, n_bones)])
     heads = rng.normal(size=(n_bones, 3))
     tails = heads + rng.normal(size=(n_bones, 3))
-    tails[0] = heads[0] + [0.0, 0.0, 1.0]  # +-Z bones take the other reference axis in _bone_rotations
+    tails[0] = heads[0] + [1.0, 0.0, 0.0]  # a bone along +-X takes its roll from the front in bone_rotations
     return Skeleton([f"b{i}" for i in range(n_bones)], parents, heads, tails)
 
 

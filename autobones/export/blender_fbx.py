@@ -6,6 +6,7 @@ exporter/importer)::
     blender -b --factory-startup --python-exit-code 1 -P blender_fbx.py -- \
         export RIG.glb WEIGHTS.npz OUT.fbx REPORT.json
     blender -b --factory-startup --python-exit-code 1 -P blender_fbx.py -- inspect FILE(.glb|.fbx) OUT.npz
+    blender -b --factory-startup --python-exit-code 1 -P blender_fbx.py -- pose FILE(.glb|.fbx) TURNS.json OUT.npz
 
 ``export`` imports the glb (bones keep the glb's joint axes: ``bone_heuristic="BLENDER"``),
 replaces the glb's four influences per vertex by every weight of ``WEIGHTS.npz`` (the rig's full
@@ -16,6 +17,11 @@ animation as FBX (Y up, no leaf bones). REPORT.json says what was written.
 ``inspect`` imports a file into an empty scene and saves, in the glTF file frame (+Y up, Blender's
 Z-up world converted back) and file units: bone names, parents and heads; the mesh's rest
 positions; its full vertex-group weights (n, b) in bone order; shape key names and deltas.
+
+``pose`` imports a file and, for each turn of TURNS.json (``[bone name, [x, y, z], degrees]``:
+the axis in the bone's own rest frame, Blender's pose-bone space, whose +Y runs along the bone),
+turns that one bone, evaluates the armature-deformed mesh and saves its vertices (k, n, 3) in
+the glTF file frame and units (``positions``), every other bone at rest.
 """
 import json
 import sys
@@ -135,12 +141,40 @@ def inspect(path, out):
              blender=np.array(bpy.app.version_string))
 
 
+def pose(path, turns_path, out):
+    import mathutils
+
+    arm, obj = import_file(path)
+    with open(turns_path) as fh:
+        turns = json.load(fh)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    n = len(obj.data.vertices)
+    P = np.zeros((len(turns), n, 3))
+    for k, (bone, axis, degrees) in enumerate(turns):
+        pb = arm.pose.bones[bone]
+        pb.rotation_mode = "QUATERNION"  # the turn about the bone's rest axes, no Euler order involved
+        pb.rotation_quaternion = mathutils.Quaternion(mathutils.Vector(axis).normalized(), np.radians(degrees))
+        bpy.context.view_layer.update()
+        ev = obj.evaluated_get(depsgraph)
+        co = np.zeros(len(ev.data.vertices) * 3)
+        ev.data.vertices.foreach_get("co", co)
+        if len(co) != 3 * n:
+            raise SystemExit(f"{path}: the evaluated mesh has {len(co) // 3} vertices, the mesh {n}")
+        M = np.array(ev.matrix_world)
+        P[k] = (co.reshape(-1, 3) @ M[:3, :3].T + M[:3, 3]) @ S.T
+        pb.rotation_quaternion = mathutils.Quaternion()
+    bpy.context.view_layer.update()
+    np.savez(out, positions=P, blender=np.array(bpy.app.version_string))
+
+
 if __name__ == "__main__":
     args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     if len(args) == 5 and args[0] == "export":
         export(*args[1:])
     elif len(args) == 3 and args[0] == "inspect":
         inspect(*args[1:])
+    elif len(args) == 4 and args[0] == "pose":
+        pose(*args[1:])
     else:
         raise SystemExit("usage: blender -b -P blender_fbx.py -- export RIG.glb WEIGHTS.npz OUT.fbx REPORT.json | "
-                         "inspect FILE OUT.npz")
+                         "inspect FILE OUT.npz | pose FILE TURNS.json OUT.npz")

@@ -58,7 +58,7 @@ def run_blender(args, what):
     return out
 
 
-def write_fbx(rig_path, out_path):
+def write_fbx(rig_path, out_path, max_influences=None):
     """Write the rig saved as ``rig_path`` to ``out_path`` (.fbx) with Blender; see the module doc.
 
     Parameters
@@ -67,6 +67,9 @@ def write_fbx(rig_path, out_path):
         A glb written by autobones, its ``.rig.json`` and ``.weights.npz`` beside it.
     out_path : str or os.PathLike
         The ``.fbx`` to write (under a temporary name, renamed when complete).
+    max_influences : int or None
+        None (the default) writes every weight of the rig; 4 the glb's four per vertex, so the
+        FBX deforms exactly as the glb does (:func:`autobones.export.usd.skin_weights`).
 
     Returns
     -------
@@ -90,6 +93,8 @@ def write_fbx(rig_path, out_path):
     try:
         with tempfile.TemporaryDirectory(prefix="autobones-fbx-") as work:
             report_path = os.path.join(work, "report.json")
+            if max_influences is not None:  # the glb's cut, made here so Blender gets exactly those weights
+                npz = _cut_weights(npz, src.rig.weights, max_influences, os.path.join(work, "weights.npz"))
             run_blender(["export", os.path.abspath(rig_path), os.path.abspath(npz), tmp, report_path], out_path)
             with open(report_path, encoding="utf-8") as fh:
                 rep = json.load(fh)
@@ -105,6 +110,18 @@ def write_fbx(rig_path, out_path):
             "weights_matched_by": rep["weights_matched_by"], "rig_bones": len(src.joint_names)}
 
 
+def _cut_weights(npz, W, max_influences, out):
+    """A copy of the weights sidecar ``npz`` at ``out`` whose ``weights`` keep each vertex's
+    ``max_influences`` largest, renormalised as the glb writes them; returns ``out``."""
+    from .usd import skin_weights
+
+    with np.load(npz) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["weights"] = skin_weights(W, max_influences).astype(np.float32)
+    np.savez(out, **arrays)
+    return out
+
+
 def inspect_file(path):
     """What Blender sees in ``path`` (.fbx or .glb) imported into an empty scene: a dict of arrays
     (glTF frame, file units): ``bone_names``, ``bone_parents`` ('' for roots), ``bone_heads`` (b, 3),
@@ -115,6 +132,33 @@ def inspect_file(path):
         run_blender(["inspect", os.path.abspath(os.fspath(path)), out], os.fspath(path))
         with np.load(out) as z:
             return {k: z[k] for k in z.files}
+
+
+def posed_vertices(path, turns):
+    """Blender's own skinning of ``path`` (.fbx or .glb) with one bone turned at a time.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, imported into an empty scene as :func:`inspect_file` does.
+    turns : sequence of (bone name, (3,) axis, degrees)
+        The axis in the bone's own rest frame (local +Y along the bone, as in the glb's joints).
+
+    Returns
+    -------
+    (len(turns), n, 3) float
+        The armature-deformed vertices for each turn (only that bone turned), in the glTF file
+        frame (Y up) and the file's units, in Blender's vertex order (the file's, for an FBX
+        this package wrote).
+    """
+    turns = [[str(b), [float(a) for a in axis], float(deg)] for b, axis, deg in turns]
+    with tempfile.TemporaryDirectory(prefix="autobones-pose-") as work:
+        spec, out = os.path.join(work, "turns.json"), os.path.join(work, "posed.npz")
+        with open(spec, "w", encoding="utf-8") as fh:
+            json.dump(turns, fh)
+        run_blender(["pose", os.path.abspath(os.fspath(path)), spec, out], os.fspath(path))
+        with np.load(out) as z:
+            return z["positions"]
 
 
 def check_fbx(fbx_path, rig_path):

@@ -6,11 +6,16 @@ stage, its default prim ``/Rig`` a ``SkelRoot``:
 - ``/Rig/Skeleton`` (``Skeleton``): one joint per glTF bone (marker nodes are not joints), joint
   paths from the bone names (``neck/head/jaw``; names that are not USD identifiers are made
   valid, the original names kept in ``jointNames``); ``bindTransforms`` = ``restTransforms``
-  composed = the glb's rest pose, each joint's +Y from its head to its tail as in the glb.
+  composed = the glb's rest pose: the glb's own joint frames (+Y from the joint's head to its
+  tail, +X on the head's left-right axis), so turning a joint about its local axes turns the
+  same way in USD as in the glb; the skinned points agree to float round-off when the weights
+  are the same (``max_influences=4``; with every weight, the default, they differ by what the
+  glb's four-influence cut leaves out).
 - ``/Rig/Mesh`` (``Mesh``, triangles, ``subdivisionScheme = "none"``): the rig's vertices (float32
   of the exact input vertices, the input's own order), ``SkelBindingAPI`` with every influence
   the rig has (``primvars:skel:jointIndices`` / ``jointWeights``, elementSize = the largest number
-  of non-zero weights on one vertex, not the glb's four), ``geomBindTransform`` identity (the mesh
+  of non-zero weights on one vertex, not the glb's four, unless ``max_influences`` asks for the
+  glb's), ``geomBindTransform`` identity (the mesh
   and the skeleton share the rig's frame), per-vertex ``primvars:autobones:*`` for the rig's depth
   labels and transferred fields.
 - ``/Rig/Mesh/<name>`` (``BlendShape``): one per glb morph target (sparse ``offsets`` +
@@ -197,8 +202,25 @@ def _rig_record(src, meters_per_unit, guessed):
     return _to_vt(rec)
 
 
-def build_stage(src, meters_per_unit=None):
-    """The UsdSkel stage (in memory) of a :class:`autobones.export.source.RigSource`; see the module doc."""
+def skin_weights(W, max_influences=None):
+    """The weights a stage carries: ``W`` (n, b) as it is (None), or each vertex's
+    ``max_influences`` largest renormalised exactly as the glb writes them
+    (:func:`autobones.io.gltf.top_influences`), so a DCC deforms the mesh as glTF clients do."""
+    if max_influences is None:
+        return np.asarray(W, dtype=np.float64)
+    from ..io.gltf import top_influences
+
+    if int(max_influences) < 1:
+        raise AutobonesError(f"max influences must be at least 1, not {max_influences!r}")
+    J, w = top_influences(W, int(max_influences))
+    out = np.zeros(np.shape(W))
+    np.add.at(out, (np.repeat(np.arange(len(J)), J.shape[1]), J.ravel()), w.ravel().astype(np.float64))
+    return out
+
+
+def build_stage(src, meters_per_unit=None, max_influences=None):
+    """The UsdSkel stage (in memory) of a :class:`autobones.export.source.RigSource`; see the module doc.
+    ``max_influences``: None keeps every weight, k keeps the glb's k largest (:func:`skin_weights`)."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = _pxr()
     rig = src.rig
     guessed = meters_per_unit is None
@@ -238,7 +260,7 @@ def build_stage(src, meters_per_unit=None):
 
     binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
     binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
-    idx, w = all_influences(rig.weights)
+    idx, w = all_influences(skin_weights(rig.weights, max_influences))
     k = idx.shape[1]
     binding.CreateJointIndicesPrimvar(False, k).Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(idx.ravel())))
     binding.CreateJointWeightsPrimvar(False, k).Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(w.ravel())))
@@ -372,7 +394,7 @@ def validate_stage(stage_or_path):
     return out
 
 
-def write_usd(rig_path, out_path, meters_per_unit=None):
+def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     """Write the rig saved as ``rig_path`` to ``out_path`` as a UsdSkel stage (see the module doc).
 
     Parameters
@@ -385,6 +407,9 @@ def write_usd(rig_path, out_path, meters_per_unit=None):
         ``.usdc``). Written under a temporary name and renamed when complete.
     meters_per_unit : float or None
         The stage's ``metersPerUnit``; None guesses it from the head size (:func:`guess_meters_per_unit`).
+    max_influences : int or None
+        None (the default) writes every weight of the rig; 4 writes the glb's four per vertex,
+        so USD skins the mesh exactly as glTF clients skin the glb (:func:`skin_weights`).
 
     Returns
     -------
@@ -404,7 +429,7 @@ def write_usd(rig_path, out_path, meters_per_unit=None):
     check_destination(out_path, "the USD file")
     UsdGeom = _pxr()[4]
     src = read_rig_source(rig_path)
-    stage = build_stage(src, meters_per_unit)
+    stage = build_stage(src, meters_per_unit, max_influences)
     fd, tmp = temp_beside(out_path, suffix=ext)
     os.close(fd)
     try:
@@ -426,7 +451,7 @@ def write_usd(rig_path, out_path, meters_per_unit=None):
         if os.path.exists(tmp):
             os.remove(tmp)
     rig = src.rig
-    idx, _ = all_influences(rig.weights)
+    idx, _ = all_influences(skin_weights(rig.weights, max_influences))
     return {"path": out_path, "joints": len(src.joint_names), "vertices": len(rig.vertices),
             "influences": int(idx.shape[1]), "blend_shapes": len(src.morph_targets),
             "animations": len(src.animations), "meters_per_unit": UsdGeom.GetStageMetersPerUnit(stage),

@@ -4,7 +4,8 @@ One container writer for both: :func:`glb_bytes` lays out one mesh, its accessor
 one binary buffer; a :class:`Skin` adds joint nodes, ``JOINTS_0``/``WEIGHTS_0`` and the
 skin; a static mesh is the same file minus the skin. Each joint's local +Y axis points
 from its head to its tail (Blender's bone convention), so an importer rebuilds the bones
-as placed. The bind pose is the rest pose: with no joint moved, the skinned mesh is the
+as placed, and its +X lies on the head's left-right axis (:func:`bone_rotations`), so
+turning a joint about its own axes pitches, twists and tilts it in the head's terms. The bind pose is the rest pose: with no joint moved, the skinned mesh is the
 input mesh exactly (float32 positions as given, in the input's own frame and units).
 
 The container is small enough to write directly with numpy, struct and json;
@@ -57,18 +58,49 @@ def top_influences(W, k=4):
     return joints, weights
 
 
-def _bone_rotations(skeleton):
-    """(b, 3, 3) world rotations whose +Y column points head -> tail."""
-    out = []
-    for h, t in zip(skeleton.heads, skeleton.tails):
-        y = t - h
-        y = y / np.linalg.norm(y) if np.linalg.norm(y) > 0 else np.array([0.0, 1.0, 0.0])
-        ref = np.array([0.0, 0.0, 1.0]) if abs(y[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-        x = np.cross(y, ref)
-        x /= np.linalg.norm(x)
-        z = np.cross(x, y)
-        out.append(np.column_stack([x, y, z]))
-    return np.array(out)
+LATERAL_COS = 0.9  # a bone within ~26 deg of the left-right axis takes its roll from the front instead
+
+
+def bone_rotations(skeleton, axes=None):
+    """(b, 3, 3) rest world rotations of the bones: columns = each joint's local +X, +Y, +Z.
+
+    The convention (Blender's armatures, which FBX and USD pipelines follow): local +Y runs along
+    the bone from its head to its tail; the roll puts local +X on the head's left-right axis
+    (canonical +X, the subject's left) with its along-the-bone part removed, and +Z = X x Y. So
+    every bone that is not sideways has the same sense of "pitch" (about +X: nods the head, tips
+    a facial bone), an upright bone twists about +Y (the head turns left/right) and tilts about
+    +Z (toward the shoulder), and mirrored bones get mirrored motions from the same angles.
+    Taken from the head's own frame, not the file's axes, so the roll is the same for a head
+    stored Z-up, Y-up or turned. A bone within ~26 deg of the left-right axis (a cheek bone
+    pointing sideways) has no usable left-right direction across it: its +Z is the head's
+    front with the along-the-bone part removed and +X = Y x Z.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        Heads and tails in the mesh's frame and units.
+    axes : (3, 3) float or None
+        Rows: the head's canonical +X (subject's left), +Y (up), +Z (front) as unit vectors in
+        the mesh's frame (``Frame.rotation``); None takes the mesh's own x, y, z.
+        A zero-length bone points along +Y of this frame.
+
+    Returns
+    -------
+    (b, 3, 3) float64, proper rotations (det +1) in the mesh's frame.
+    """
+    A = np.eye(3) if axes is None else np.asarray(axes, dtype=np.float64)
+    A = A / np.linalg.norm(A, axis=1, keepdims=True)
+    left, up, front = A
+    d = np.asarray(skeleton.tails, dtype=np.float64) - np.asarray(skeleton.heads, dtype=np.float64)
+    n = np.linalg.norm(d, axis=1, keepdims=True)
+    y = np.where(n > 0, d / np.where(n > 0, n, 1.0), up)
+    x = left - (y @ left)[:, None] * y  # the left-right axis across the bone
+    z = front - (y @ front)[:, None] * y
+    sideways = np.abs(y @ left) > LATERAL_COS
+    x = x / np.linalg.norm(x, axis=1, keepdims=True).clip(1e-300)
+    z = z / np.linalg.norm(z, axis=1, keepdims=True).clip(1e-300)
+    x, z = np.where(sideways[:, None], np.cross(y, z), x), np.where(sideways[:, None], z, np.cross(x, y))
+    return np.stack([x, y, z], axis=2)
 
 
 def _quaternion(R):
@@ -101,7 +133,7 @@ class Skin:
     inverse_binds: np.ndarray
 
 
-def joint_nodes(skeleton, markers=()):
+def joint_nodes(skeleton, markers=(), axes=None):
     """glTF nodes of the skeleton and its markers, and the inverse bind matrices.
 
     Parameters
@@ -110,6 +142,9 @@ def joint_nodes(skeleton, markers=()):
         Bones (heads, tails in the mesh's frame and units; parents before children not required).
     markers : sequence of (name, bone name, (3,) position)
         Extra named nodes parented to a bone, positions in the skeleton's frame.
+    axes : (3, 3) float or None
+        The head's canonical axes in the skeleton's frame (rows +X left, +Y up, +Z front), which
+        set each bone's roll (:func:`bone_rotations`); None: the frame's own x, y, z.
 
     Returns
     -------
@@ -117,10 +152,10 @@ def joint_nodes(skeleton, markers=()):
         One node per bone (local translation and rotation quaternion, ``children``), then
         one per marker (translation in its bone's frame).
     inverse_binds : (b, 16) float32
-        Inverse of each bone's world transform (rotation with +Y head -> tail, origin at the
-        head), column-major as glTF stores MAT4.
+        Inverse of each bone's world transform (:func:`bone_rotations`: +Y head -> tail, +X the
+        head's left-right axis across the bone; origin at the head), column-major as glTF stores MAT4.
     """
-    R = _bone_rotations(skeleton)
+    R = bone_rotations(skeleton, axes)
     nodes, ibm = [], []
     for i, name in enumerate(skeleton.names):
         p = skeleton.parents[i]
@@ -144,11 +179,12 @@ def joint_nodes(skeleton, markers=()):
     return nodes, np.array(ibm, dtype=np.float32)
 
 
-def skin_for(skeleton, W, max_influences=4, markers=()):
+def skin_for(skeleton, W, max_influences=4, markers=(), axes=None):
     """The :class:`Skin` binding a mesh to ``skeleton`` with weights ``W`` (n, b) float,
-    keeping each vertex's ``max_influences`` largest weights (:func:`top_influences`)."""
+    keeping each vertex's ``max_influences`` largest weights (:func:`top_influences`);
+    ``axes``: the head's canonical axes that set the bones' roll (:func:`joint_nodes`)."""
     joints, weights = top_influences(W, max_influences)
-    nodes, ibm = joint_nodes(skeleton, markers)
+    nodes, ibm = joint_nodes(skeleton, markers, axes)
     jdtype = np.uint8 if len(skeleton) <= 256 else np.uint16
     roots = [i for i, p in enumerate(skeleton.parents) if p < 0]
     return Skin(nodes=nodes, roots=roots, joints=joints.astype(jdtype), weights=weights, inverse_binds=ibm)
@@ -264,7 +300,7 @@ def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
     return pack_glb(doc, buf.body())
 
 
-def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=(), morph_targets=()):
+def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=(), morph_targets=(), axes=None):
     """Write the skinned mesh to ``path``.
 
     Parameters
@@ -290,8 +326,12 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         in ``meshes[0].extras.targetNames`` (the names Blender, three.js and Babylon
         give the shape keys), default weights 0 so the rest pose is unchanged. glTF
         applies them before skinning. None given: the file is exactly as without them.
+    axes : (3, 3) float or None
+        Rows: the head's canonical +X (subject's left), +Y (up), +Z (front) in the frame of ``V``
+        (``Frame.rotation``); they set the joints' roll (:func:`bone_rotations`). None: the
+        frame's own x, y, z (right for a head stored +Y up, facing +Z).
     """
-    data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers), extras=extras,
+    data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers, axes), extras=extras,
                      morph_targets=morph_targets)
     with open(path, "wb") as fh:
         fh.write(data)
