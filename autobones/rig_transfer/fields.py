@@ -233,11 +233,17 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
     """
     from ..geometry.normals import triangle_normals, vertex_normals
 
-    size = np.ptp(V_tgt, axis=0).max()
+    from .stick import facing_face
+
+    size = _extent(V_tgt)
+    V_stuck = np.asarray(V_stuck, dtype=np.float64)
     face, bary, dist = sample_fields(V_stuck, F_src, V_tgt)
+    n_tgt = vertex_normals(V_tgt, F_tgt)
+    # a target vertex on a stuck edge or corner (where the generic was stuck onto that very vertex)
+    # belongs to every stuck face there, and rounding picked one: on a fold they face opposite ways
+    face, bary = facing_face(np.einsum("ki,kij->kj", bary, V_stuck[F_src[face]]), face, bary, V_stuck, F_src, n_tgt)
     n_src = triangle_normals(V_stuck, F_src)[face]
     n_src /= np.maximum(np.linalg.norm(n_src, axis=1, keepdims=True), 1e-300)
-    n_tgt = vertex_normals(V_tgt, F_tgt)
     cos = (n_src * n_tgt).sum(axis=1)
     reliable = (dist <= max_distance * size) & (cos >= np.cos(np.radians(max_angle)))
     corners = F_src[face]
@@ -270,6 +276,14 @@ def transfer_fields(V_stuck, F_src, fields, V_tgt, F_tgt, source_reliable=None, 
         else:
             out[name] = block.reshape((len(face),) + tuple(extra))
     return out, reliable
+
+
+def _extent(V):
+    """The largest extent of ``V`` (n, 3) along its principal axes (its units): the bounding box's
+    largest side in a frame that turns with the mesh, so a turned head gets the same tolerance."""
+    V = np.asarray(V, dtype=np.float64)
+    C = V - V.mean(axis=0)
+    return float(np.ptp(C @ np.linalg.eigh(C.T @ C)[1], axis=0).max())
 
 
 def _vector_turns(V_rest, V_stuck, F_src, face, fields, vectors, directions):
