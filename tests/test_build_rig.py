@@ -85,11 +85,14 @@ def test_skeleton_names_parents_and_inside(rig, head):
     assert (winding(V, F, P) > 0.5).all()
 
 
-def test_jaw_pivot_in_front_of_and_below_tragion(rig, head):
+def test_jaw_pivot_at_the_condyle_in_front_of_the_tragion(rig, head):
+    # the condyle: 10-15 mm anterior of the ear canal at its height (mm scaled by ex-ex / 90 mm);
+    # the default head is in metres, +Y up, +Z front
     _, _, lm = head
     j = rig.skeleton.heads[rig.skeleton.index("jaw")]
     tr = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
-    assert j[1] < tr[1] - 0.005 and j[2] > tr[2] + 0.005
+    mm = np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]) / 90.0
+    assert 10 * mm < j[2] - tr[2] < 15 * mm and abs(j[1] - tr[1]) < 2 * mm
     assert abs(j[0]) < 0.002  # one jaw bone on the midline
     tail = rig.skeleton.tails[rig.skeleton.index("jaw")]
     assert tail[1] < lm["stomion"][1] and tail[2] > j[2] + 0.03  # toward the chin

@@ -17,11 +17,14 @@ with the face unit ``fu`` = distance between the outer eye corners (ex-ex,
 about 9.3 cm): ``CM = fu / 9.3``.
 
 Skeleton (parents neck -> head -> {jaw, eye_l, eye_r})
-    head  pivot 2 cm below and 0.5 cm behind the midpoint of the tragions (skull
-          base), tail 85% of the way to the vertex.
+    head  pivot at the occiput-C1 centre of rotation: 22.5 mm posterior and 22.6 mm
+          inferior of the tragions' midpoint (the ear canals'; Chancey, Ottaviano, Myers &
+          Nightingale 2007), on the midline, scaled by ex-ex / 90 mm; tail 85% of the way
+          to the vertex.
     neck  from a neck-slice centroid (half the pivot-menton height below the menton,
           kept above the mesh bottom) up to the head pivot.
-    jaw   pivot 1 cm anterior and 1 cm inferior to each tragion, averaged to the
+    jaw   pivot at the condyles: 12 mm anterior of the tragions' midpoint at its height
+          (the condyle sits 10-15 mm in front of the ear canal), scaled the same way, on the
           midline; tail 85% of the way to the chin (mean of pogonion and menton).
     eye_s centre = midpoint of exocanthion and endocanthion pushed 1.15 cm back (an
           eyeball radius); tail 0.8 cm in front of it.
@@ -104,6 +107,11 @@ SKELETON_NAMES = (
     "frontotemporale_l", "frontotemporale_r",
 )
 ADULT_EX_EX_CM = 9.3
+# Chancey, Ottaviano, Myers & Nightingale 2007: joints relative to the ear canal (here the tragions'
+# midpoint, which lies beside it) in millimetres of an adult whose ex-ex is EX_EX_MM, as (up, front)
+EX_EX_MM = 90.0
+OCCIPUT_C1_MM = (-22.6, -22.5)   # the occiput-C1 centre of rotation: inferior, posterior
+CONDYLE_MM = (0.0, 12.0)         # the mandibular condyle: at the canal's height, 10-15 mm anterior
 
 
 def load_muscle_definitions(path=None):
@@ -220,13 +228,9 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
 def _skeleton(Vc, L, cm, wn):
     """Canonical-frame skeleton (module doc): (Skeleton, jaw pivot (3,), {side: (eye centre, eye tail)})."""
     # --- skeleton --------------------------------------------------------------------------
-    tr = 0.5 * (L["tragion_l"] + L["tragion_r"])
-    head0 = tr + np.array([0.0, -2.0 * cm, -0.5 * cm])
-    head0[0] = 0.0
+    head0, jaw0 = anatomical_joints(L)
     head1 = head0 + 0.85 * (L["vertex"] - head0)
     head1[0] = 0.0
-    jaw0 = 0.5 * ((L["tragion_l"] + [0, -cm, cm]) + (L["tragion_r"] + [0, -cm, cm]))
-    jaw0[0] = 0.0
     chin = 0.5 * (L["pogonion"] + L["menton"])
     jaw1 = jaw0 + 0.85 * (chin - jaw0)
     bottom = Vc[:, 1].min()
@@ -245,6 +249,36 @@ def _skeleton(Vc, L, cm, wn):
     tails = np.array([joints["head0"], joints["head1"], joints["jaw1"], eyes["l"][1], eyes["r"][1]])
     skel_c = Skeleton(list(BONES), [-1, 0, 1, 1, 1], heads, tails)
     return skel_c, jaw0, eyes
+
+
+def anatomical_joints(L):
+    """The occiput-C1 centre of rotation and the jaw's condyle hinge from the ear canals.
+
+    Chancey, Ottaviano, Myers & Nightingale 2007 (J. Biomech. 40) measured the occiput-C1 centre
+    of rotation 22.5 mm posterior and 22.6 mm inferior of the external auditory meatus; the
+    mandibular condyle sits 10-15 mm anterior of it at its height (:data:`CONDYLE_MM`: 12). The
+    tragions stand in for the canals, and millimetres are scaled by the head's ex-ex over
+    :data:`EX_EX_MM` (both offsets are adult averages; the ratio keeps a child's or a cartoon's
+    proportions). Both joints are put on the midline: the hinge of the two condyles, the pivot
+    of the two occipital condyles.
+
+    Parameters
+    ----------
+    L : mapping str -> (3,) float
+        Canonical-frame landmarks (+Y up, +Z front, +X left) with ``tragion_l/_r`` and
+        ``exocanthion_l/_r``.
+
+    Returns
+    -------
+    head, jaw : (3,) float
+        Canonical positions of the ``head`` joint and the ``jaw`` joint.
+    """
+    tr = 0.5 * (np.asarray(L["tragion_l"], dtype=np.float64) + np.asarray(L["tragion_r"], dtype=np.float64))
+    mm = float(np.linalg.norm(np.asarray(L["exocanthion_l"]) - np.asarray(L["exocanthion_r"]))) / EX_EX_MM
+    head = tr + mm * np.array([0.0, *OCCIPUT_C1_MM])
+    jaw = tr + mm * np.array([0.0, *CONDYLE_MM])
+    head[0] = jaw[0] = 0.0
+    return head, jaw
 
 
 def _skin_weights(Vc, F, L, cm, jaw0, eyes):
@@ -393,7 +427,7 @@ def _regions(Vc, L, cm, jaw, below_mouth, jaw0):
     near_go = np.minimum(np.linalg.norm(Vc - L["gonion_l"], axis=1), np.linalg.norm(Vc - L["gonion_r"], axis=1))
     put((jaw > 0.5) | ((near_go < 1.5 * cm) & (below_mouth > -0.5 * cm)), "jaw")
     # neck: below the plane (containing the x axis) through 0.8 cm under the menton and the
-    # skull base behind (opisthocranion depth, head pivot height)
+    # skull base behind (opisthocranion depth, 2 cm under the tragions)
     neck = _above_neck_plane(Vc, L, cm) < 0
     # cheeks: face in front of the ears between the jaw/mouth and the eyes
     put(face_front & (y < lid_top) & (y > L["menton"][1]) & ~neck, "cheeks")
