@@ -68,9 +68,6 @@ AUTHORED = float(np.cos(np.radians(AUTHORED_DEG)))
 # a plane from the sample's principal directions replaces the best from the input axes only when it
 # mirrors the head this much better, so heads authored on their axes keep their frame bit for bit
 SHAPE_PLANE_GAIN = 0.8
-# ... and they are tried only when that best mirrors the head worse than this (its sample's RMS radii):
-# true planes measure 0.024-0.053 on the shared and zoo heads, the trapped ones 0.11-0.13
-SHAPE_PLANE_ABOVE = 0.06
 # the reference head's overlay score (trimmed distances in RMS radii) above which a head is not taken
 # for a human face: human heads and busts of the shared and zoo sets score 0.08-0.12 in their true
 # frame, the zoo's animals and cartoons 0.13-0.46
@@ -308,10 +305,11 @@ def _symmetry_plane(V, F, P, tree, rms, up_v, front_v):
         planes = list(pool.map(lambda n0: _refine_plane(P, tree, n0, center @ n0, rms), starts))
         cues = None if cues_job is None else cues_job.result()
     best = _best_plane(P, tree, planes, rms)
-    if given is None and best[0] > SHAPE_PLANE_ABOVE * rms:
+    if given is None:
         # a head turned in its file (not about an axis) traps the ICPs started on the input axes
-        # on planes that mirror it badly (ICT turned at random: 0.11-0.13 head sizes against
-        # 0.03): the planes started from the sample's own principal directions win then
+        # on planes that mirror it badly (ICT turned at random: 0.11-0.13 of the RMS radius
+        # against 0.03), and an asymmetric one can trap them as is (the penguin: 0.041 against
+        # 0.029): the planes started from the sample's own principal directions win then
         shaped = _best_plane(P, tree, [_refine_plane(P, tree, n0, center @ n0, rms)
                                        for n0 in _shape_starts(P, tree)], rms)
         best = shaped if shaped[0] < SHAPE_PLANE_GAIN * best[0] else best
