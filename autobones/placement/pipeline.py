@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from .facial_bones import bone_count, check_seed, facial_bones
-from ..io.mesh import resolve_mesh
+from ..io.mesh import resolve_mesh, stray_parts
 from ..geometry.proxy import mesh_proxy
 from ..orient import detect_frame
 from ..rig import Rig
@@ -62,7 +62,10 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     random_state = check_seed(random_state)
     if landmarks is not None:
         return _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state)
-    V, F, source = resolve_mesh(mesh)
+    V, F, source = resolve_mesh(mesh, strays=True)
+    body = stray_parts(V, F)
+    if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
+        return body.restore(place((body.V, body.F), density, up, front, random_state), source)
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
     C = frame.to_canonical(V)

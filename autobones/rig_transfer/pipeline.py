@@ -37,7 +37,7 @@ from .under_skin import carry_muscles, under_skin_warp
 from ..errors import AutobonesError
 from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
-from ..io.mesh import resolve_mesh
+from ..io.mesh import resolve_mesh, stray_parts
 from ..orient import detect_frame, frame_from_landmarks
 from ..geometry.weights import prune_weights
 from ..rig import Rig
@@ -173,7 +173,11 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     watch = Stopwatch()
     lap, timings = watch.lap, watch.timings
 
-    V, F, source = resolve_mesh(head)
+    V, F, source = resolve_mesh(head, strays=True)
+    body = stray_parts(V, F)
+    if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
+        return body.restore(transfer((body.V, body.F), landmarks, rig, up, front, control_points, details, arkit,
+                                     symmetric, **fit_options), source)
     generic = load_generic(rig)
     lap("load")
     lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
