@@ -28,6 +28,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import autobones
+from autobones.errors import AutobonesError
 from autobones.io.gltf import LATERAL_COS, bone_rotations
 from autobones.skeleton import Skeleton
 
@@ -219,8 +220,13 @@ def test_usd_turns_every_joint_about_its_local_axes_as_the_glb(rigs, name, tmp_p
     glb, size = GlbSkin(path), float(rig.frame.size)
     assert glb.names == list(rig.skeleton.names)
     turns = _turns(glb.names)
-    four = write_usd(path, tmp_path / "four.usda", max_influences=4)["path"]
-    every = write_usd(path, tmp_path / "every.usda")["path"]
+    info4, info_all = (write_usd(path, tmp_path / "four.usda", max_influences=4),
+                       write_usd(path, tmp_path / "every.usda"))
+    assert info4["validation"] == [] and info4["influences"] == min(4, info_all["influences"])
+    assert info_all["influences"] == int((rig.weights > 0).sum(axis=1).max())
+    four, every = info4["path"], info_all["path"]
+    with pytest.raises(AutobonesError, match="at least 1"):
+        write_usd(path, tmp_path / "none.usda", max_influences=0)
     want4 = np.array([glb.skinned(k, _turn(a)) for k, a in turns])
     want_all = np.array([glb.skinned(k, _turn(a), weights=rig.weights) for k, a in turns])
     moved = _worst(want4, rig.vertices[None], size)
@@ -253,3 +259,22 @@ def test_blender_turns_every_joint_of_the_fbx_about_its_local_axes_as_the_glb(ri
         k, a = turns[int(err.argmax())]
         assert err.max() <= TOL, f"{cut or 'every'} influences: {glb.names[k]} about local {'xyz'[a]}: " \
                                  f"{err.max():.2e} head sizes"
+
+
+def test_a_head_stored_z_up_gets_the_same_joint_frames_in_its_own_terms(rigs, tmp_path):
+    """The roll comes from the head's frame, not the file's axes: the built-in head stored Z-up
+    (turned 90 deg about x) gets, in canonical coordinates, the joint frames of the upright one
+    (before #32 its head joint's +X was 90 deg off: a turn about local x rolled the head)."""
+    from autobones.generic_rig import default_head_path
+    from autobones.io.mesh import load_mesh
+
+    rig, path = rigs("place")
+    V, F = load_mesh(default_head_path())[:2]
+    Q = Rotation.from_euler("x", 90, degrees=True).as_matrix()
+    turned = autobones.place((np.asarray(V) @ Q.T, F))
+    turned.save(tmp_path / "z_up.glb")
+    frames = [np.einsum("ij,bjk->bik", r.frame.rotation, GlbSkin(p).world()[:, :3, :3])
+              for r, p in ((rig, path), (turned, tmp_path / "z_up.glb"))]
+    np.testing.assert_allclose(turned.frame.to_canonical(turned.skeleton.heads),
+                               rig.frame.to_canonical(rig.skeleton.heads), atol=1e-5)
+    np.testing.assert_allclose(frames[1], frames[0], atol=1e-5)

@@ -5,8 +5,9 @@ one binary buffer; a :class:`Skin` adds joint nodes, ``JOINTS_0``/``WEIGHTS_0`` 
 skin; a static mesh is the same file minus the skin. Each joint's local +Y axis points
 from its head to its tail (Blender's bone convention), so an importer rebuilds the bones
 as placed, and its +X lies on the head's left-right axis (:func:`bone_rotations`), so
-turning a joint about its own axes pitches, twists and tilts it in the head's terms. The bind pose is the rest pose: with no joint moved, the skinned mesh is the
-input mesh exactly (float32 positions as given, in the input's own frame and units).
+turning a joint about its own axes pitches, twists and tilts it in the head's terms. The
+bind pose is the rest pose: with no joint moved, the skinned mesh is the input mesh exactly
+(float32 positions as given, in the input's own frame and units).
 
 The container is small enough to write directly with numpy, struct and json;
 tests read it back with two independent libraries (pygltflib, trimesh), the
