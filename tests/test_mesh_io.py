@@ -244,3 +244,93 @@ def test_strict_json_writes_null_for_undefined_values():
     text = strict_dumps(doc, indent=1)
     assert json.loads(text) == {"a": None, "b": [1, None, [2.5, None]], "c": 0.1, "d": "NaN"}
     assert strict_dumps({"x": [0.1, 2, "y"]}) == json.dumps({"x": [0.1, 2, "y"]})
+
+
+def _with_triangles(V, F, corners):
+    """``(V, F)`` plus one triangle per (3, 3) block of ``corners``, appended at the end."""
+    corners = np.asarray(corners, dtype=np.float64).reshape(-1, 3)
+    return np.vstack([V, corners]), np.vstack([F, len(V) + np.arange(len(corners)).reshape(-1, 3)])
+
+
+def _far_triangle(V, reach):
+    size = float(np.ptp(V, axis=0).max())
+    p = V.mean(axis=0) + reach * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    return p + 0.02 * size * np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e6])
+def test_a_small_far_part_is_a_stray_in_any_unit(scale):
+    """One triangle 10 head sizes away: dropped (and no outlier) at any unit; the same triangle
+    half a head size away is part of the head; a connected spike is still refused."""
+    from autobones.io.mesh import check_mesh, stray_parts
+
+    V, F = _robot()
+    V = V * scale
+    W, G = _with_triangles(V, F, _far_triangle(V, 10.0))
+    with pytest.raises(AutobonesError, match="outlier"):
+        check_mesh(W, G)                       # callers that do not drop strays still refuse them
+    check_mesh(W, G, strays=True)
+    body = stray_parts(W, G)
+    assert body is not None and body.record["parts"] == 1 and body.record["vertices"] == 3
+    assert np.array_equal(body.index, np.arange(len(V))) and np.array_equal(body.F, F)
+    assert 0 < body.record["area_fraction"] < 0.01
+    near = V[np.argmax(V[:, 1])] + [0.0, 0.5 * np.ptp(V, axis=0).max(), 0.0]
+    assert stray_parts(*_with_triangles(V, F, near + 0.02 * scale * np.eye(3))) is None
+    top = V[np.argmax(V[:, 1])]
+    spike = (np.vstack([V, top + [0.0, 2.0 * np.ptp(V, axis=0).max(), 0.0]]),
+             np.vstack([F, [[F[0, 0], F[0, 1], len(V)]]]))
+    assert stray_parts(*spike) is None
+    with pytest.raises(AutobonesError, match="outlier"):
+        check_mesh(*spike, strays=True)
+
+
+def test_many_far_parts_are_a_mess_and_refused():
+    """Far parts holding more than 1% of the area (two sheets half a head wide) are not strays: the
+    outlier error stands."""
+    from autobones.io.mesh import check_mesh, stray_parts
+    from autobones.geometry.areas import triangle_areas
+
+    V, F = _robot()
+    size = float(np.ptp(V, axis=0).max())
+    centres = V.mean(axis=0) + size * np.array([[6.0, 0.0, 0.0], [0.0, -7.0, 5.0]])
+    tris = centres[:, None, :] + 0.5 * size * np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    W, G = _with_triangles(V, F, tris)
+    assert triangle_areas(W, G)[len(F):].sum() > 0.01 * triangle_areas(W, G).sum()
+    assert stray_parts(W, G) is None
+    with pytest.raises(AutobonesError, match="outlier"):
+        check_mesh(W, G, strays=True)
+
+
+def test_an_unwelded_head_is_one_body():
+    """Every triangle on its own vertices: parts join through shared positions, only the far one drops."""
+    from autobones.io.mesh import stray_parts
+
+    V, F = _robot()
+    U, G = V[F.ravel()], np.arange(3 * len(F)).reshape(-1, 3)
+    W, H = _with_triangles(U, G, _far_triangle(V, 10.0))
+    body = stray_parts(W, H)
+    assert body is not None and body.record["parts"] == 1 and len(body.index) == len(U)
+
+
+def test_place_rigs_a_head_with_a_stray_triangle(caplog):
+    """The stray's vertices weigh 1 on the root bone, the rest is the head's own rig, vertex count and
+    order unchanged; one warning and the sidecar say so."""
+    import logging
+
+    import autobones
+
+    V, F = _robot()
+    W, G = _with_triangles(V, F, _far_triangle(V, 10.0))
+    plain = autobones.place((V, F), density="sparse")
+    with caplog.at_level(logging.WARNING, logger="autobones"):
+        rig = autobones.place((W, G), density="sparse")
+    assert rig.weights.shape == (len(W), plain.weights.shape[1]) and np.array_equal(rig.vertices, W)
+    assert np.abs(rig.weights[:len(V)] - plain.weights).max() < 1e-12
+    root = rig.skeleton.names.index("neck")
+    assert np.array_equal(rig.weights[len(V):], np.eye(rig.weights.shape[1])[[root] * 3])
+    assert not rig.facial_mask[len(V):].any() and len(rig.labels) == len(W)
+    said = [r.getMessage() for r in caplog.records if "dropped" in r.getMessage()]
+    assert len(said) == 1 and "dropped 1 small part far from the head (3 vertices, 1 faces" in said[0], said
+    side = rig.sidecar()
+    assert side["options"]["dropped_parts"]["vertices"] == 3 and side["options"]["dropped_parts"]["weighted_to"] == "neck"
+    assert side["vertex_count"] == len(W)

@@ -305,3 +305,29 @@ def test_weights_are_the_same_in_any_unit():
     for s in (1e3, 1e-3):
         W = autobones.transfer((s * V, F), {k: s * p for k, p in lm.items()}).weights
         assert np.abs(W - W0).max() < 1e-6, (s, np.abs(W - W0).max())
+
+
+def test_transfer_rigs_a_head_with_a_stray_triangle(tmp_path):
+    """One triangle 10 head sizes from the goat: rigged, not refused; the triangle's vertices weigh 1 on
+    the root bone, every other vertex as without it; the sidecar says what was dropped."""
+    mesh, marks = HEADS["goat"]
+    V, F = load_mesh(mesh)
+    size = float(np.ptp(V, axis=0).max())
+    tri = V.mean(axis=0) + 10 * size * np.array([0.6, 0.0, 0.8]) + 0.02 * size * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    W, G = np.vstack([V, tri]), np.vstack([F, len(V) + np.arange(3)[None]])
+    plain = autobones.transfer((V, F), marks)
+    rig = autobones.transfer((W, G), marks)
+    assert rig.weights.shape == (len(W), plain.weights.shape[1])
+    assert np.abs(rig.weights[:len(V)] - plain.weights).max() < 1e-12
+    root = rig.skeleton.names.index("neck")
+    assert rig.skeleton.parents[root] < 0
+    assert np.array_equal(rig.weights[len(V):], np.eye(rig.weights.shape[1])[[root] * 3])
+    assert all(len(v) == len(W) for v in rig.fields.values())
+    assert np.all(rig.fields["jaw_weight"][len(V):] == 0)
+    path = tmp_path / "goat.glb"
+    rig.save(str(path))
+    side = json.load(open(tmp_path / "goat.rig.json"))
+    assert side["options"]["dropped_parts"] == {"parts": 1, "vertices": 3, "faces": 1,
+                                                "area_fraction": side["options"]["dropped_parts"]["area_fraction"],
+                                                "weighted_to": "neck"}
+    assert side["vertex_count"] == len(W)
