@@ -75,6 +75,9 @@ HUMAN_LIKE = 0.13
 # the same for a head taken for a face-only capture (scored against the reference's front part): the
 # shared heads' front halves and quarters score 0.08-0.25, the zoo's wide-necked beast 0.30
 FACE_UNLIKE = 0.28
+# a face-only capture whose opening is a planar cut stays one only when the reference's face overlays it
+# better than this share of the whole reference head stood on that cut does
+FACE_VS_NECK = 0.65
 
 
 @dataclass(frozen=True)
@@ -193,14 +196,21 @@ def detect_frame(V, F, up=None, front=None, reference=None):
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
     face_only = False
+    every, full_ref = candidates, ref
     if len(candidates) > 1 and up_v is None:
         cues = _cut_cues(V, F) if cues is None else cues
         candidates, ref, face_only = _cut_candidates(P, normal, candidates, cues, ref)
     if len(candidates) > 1:
-        # independent ICPs whose time is in the k-d tree queries, which release the GIL: threads
-        # give the same scores in about half the time on two cores
-        with ThreadPoolExecutor(max_workers=min(len(candidates), os.cpu_count() or 1)) as pool:
-            scores = list(pool.map(lambda c: _overlay_score(P, c[0], c[1], ref), candidates))
+        scores = _overlay_scores(P, candidates, ref)
+        if face_only and front_v is None and is_planar_cut(cues):
+            # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
+            # capture must overlay the reference's face far better than its whole head stood on
+            # the cut (the shared heads' front halves and quarters: 0.25-0.42 of it; the zoo's
+            # wide-necked armadillo and beast: 0.85-0.94)
+            neck = [(u, f) for u, f in every if u @ -cues["loop_normal"] > 0.5]
+            neck_scores = _overlay_scores(P, neck, full_ref) if neck else []
+            if neck and min(scores) > FACE_VS_NECK * min(neck_scores):
+                candidates, scores, ref, face_only = neck, neck_scores, full_ref, False
         up_d, front_d = candidates[int(np.argmin(scores))]
         if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
             # candidates 30 degrees apart round a turned head: settle the angle between them
@@ -223,6 +233,14 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
+
+
+def _overlay_scores(P, candidates, ref):
+    """:func:`_overlay_score` of each (up, front) candidate. Independent ICPs whose time is in the
+    k-d tree queries, which release the GIL: threads give the same scores in about half the time
+    on two cores."""
+    with ThreadPoolExecutor(max_workers=min(len(candidates), os.cpu_count() or 1)) as pool:
+        return list(pool.map(lambda c: _overlay_score(P, c[0], c[1], ref), candidates))
 
 
 def _refine_angle(P, normal, up, front, ref, half=15.0, evaluations=8):
