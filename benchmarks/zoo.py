@@ -175,7 +175,7 @@ def transfer_checks(head, var, rig, details, checks):
     out = {}
     ref = turned(head.ref, var.R)
     if 2 in checks:
-        out["2 jaw"] = guarded(zc.check_jaw, rig, var.truth)
+        out["2 jaw"] = guarded(zc.check_jaw, rig, var.truth, var.lm)
     if 3 in checks:
         out["3 neck T"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
                                    zc.chin_height(var.truth, var.R @ head.up))
