@@ -325,7 +325,8 @@ class StrayParts:
     def restore(self, rig, source=None):
         """``rig`` (rigged on the body) back on every input vertex, in input order: the dropped
         vertices weighted 1 to the root bone (the neck), 0 in float fields, morph targets and the
-        facial mask, and the labels of their nearest body vertex; ``options['dropped_parts']``."""
+        facial mask, and the labels of their nearest body vertex; ``options['dropped_parts']``.
+        ``rig.segmentation`` (``place``'s depth grouping) stays the body's, one row per ``index``."""
         from scipy.spatial import cKDTree
 
         n, keep = len(self.V_in), self.index
