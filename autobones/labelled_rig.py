@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import AutobonesError
+from .io.files import read_json
 from .io.jsonable import jsonable, strict_dumps
 from .io.obj import read_obj, write_obj
 from .skeleton import Skeleton
@@ -187,8 +188,7 @@ class LabelledRig:
             raise AutobonesError(f"{folder}: not a complete rig folder, missing {', '.join(missing)}")
         path = os.path.join(folder, "rig.json")
         try:
-            with open(path, encoding="utf-8") as fh:
-                meta = json.load(fh)
+            meta = read_json(path, "rig", "rig folder's rig.json", "not readable rig JSON")  # bounded, depth checked
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise AutobonesError(f"{path}: not readable rig JSON ({exc})") from None
         if not isinstance(meta, dict) or meta.get("format") != FORMAT:

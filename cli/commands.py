@@ -90,10 +90,9 @@ def _flipped_note(record):
 
 
 def _morph_target_count(sidecar):
-    import json
+    from autobones.io.files import read_json
 
-    with open(sidecar, encoding="utf-8") as fh:
-        return len(json.load(fh)["expressions"]["morph_targets"])
+    return len(read_json(sidecar, "sidecar")["expressions"]["morph_targets"])
 
 
 def cmd_pose(args):
@@ -101,7 +100,7 @@ def cmd_pose(args):
 
     import autobones
     from autobones.errors import AutobonesError
-    from autobones.expressions.definitions import parse_au_key
+    from autobones.expressions.definitions import load_expressions, parse_au_key
     from autobones.io.posed import FORMATS, write_posed_mesh
 
     t = time.perf_counter()
@@ -117,12 +116,14 @@ def cmd_pose(args):
     if os.path.splitext(out)[1].lower() not in FORMATS:  # refused before the rig is read
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
     _never_the_input([out], [*_rig_outputs(args.rig), args.definitions])
+    # read and checked before the rig: a bad file is refused without loading (or fitting) anything
+    definitions = load_expressions(args.definitions) if args.definitions else None
     rig = autobones.load_rig(args.rig)
     if not rig.muscles and not (arkit and rig.arkit_targets):
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
-    if args.definitions:
-        rig.expression_model(args.definitions)  # pose uses the model built last
+    if definitions is not None:
+        rig.expression_model(definitions)  # pose uses the model built last
     V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
                  eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
                  arkit=arkit or None, tissue=args.tissue)

@@ -7,9 +7,19 @@ from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BUILD_EPILOG, EXPORT_EPIL
                          TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, except that a usage error is one line on stderr and a hint, exit code 2 (the
+    README's promise for every error): ``autobones place: error: ... (see autobones place --help)``.
+    Sub-parsers are made of the same class (argparse's ``add_subparsers`` uses the parent's type)."""
+
+    def error(self, message):
+        message = " ".join(str(message).split())  # argparse's own messages may wrap; a file name may hold \n
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
     """The parser of ``autobones COMMAND ...`` (argparse)."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="autobones",
         description="Rig head meshes without a technical artist: bones, smooth skin weights, skinned glTF.")
     parser.add_argument("--version", action="store_true", help="print the version and exit")
@@ -23,6 +33,7 @@ def build_parser():
     add_view(sub)
     add_export(sub)
     add_animate(sub)
+    parser.command_parsers = sub.choices  # name -> its parser: an unknown option is that command's error
     return parser
 
 

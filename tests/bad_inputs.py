@@ -11,6 +11,12 @@ Every case is a small file (or a mesh plus a landmark file) built from the robot
 
 ``write_mesh_corpus(folder)`` and ``write_landmark_corpus(folder)`` write the cases and
 return ``{file name: Case}``.
+
+``command_cases()`` (issue #33) are single commands given a hostile file argument (a device, a
+FIFO, a folder, a file over its size or row limit, JSON nested 100k deep, a newline in a name) or
+bad options; every one must end as ``expect="refused"``: one line on stderr containing ``needle``,
+exit code 2, nothing written, the inputs untouched, and no wait on a FIFO.
+``write_command_case(folder, name, rig)`` makes the files and returns the argument list.
 """
 from __future__ import annotations
 
@@ -199,6 +205,118 @@ def landmark_cases():
     add("lm_missing", None, "failed", "no face found",
         "no landmark file beside a robot: automatic landmarks find no face there")
     return out
+
+
+# The arguments of each command case: {rig} a copy of a saved rig in the case's folder, {head} the
+# robot mesh there, {file} the bad file the case makes, {out} an output path that must not appear.
+_MEGA = 1024 ** 2
+
+
+def _capture(rows, full=True):
+    """A Live Link Face CSV: its real header and ``rows`` frames (frame-number timecodes), all zero;
+    ``full=False``: one field per frame row (the row limit is counted before any row is parsed)."""
+    from autobones.arkit.names import ARKIT_NAMES, CAPTURE_ANGLES, capture_column
+
+    cols = [capture_column(n) for n in ARKIT_NAMES] + list(CAPTURE_ANGLES)
+    head = ",".join(["Timecode", "BlendShapeCount"] + cols) + "\n"
+    tail = ("," + str(len(ARKIT_NAMES)) + ",0" * len(cols)) if full else ""
+    return (head + "".join(f"{i}{tail}\n" for i in range(rows))).encode()
+
+
+def _deep(n=100_000):
+    return b"[" * n + b"]" * n
+
+
+def command_cases():
+    """{name: (args, what {file} is, Case)}: ``what`` is a function giving the bytes to write, ``"fifo"``, ``"folder"``,
+    ``("sparse", n)`` (a sparse file of n bytes: over a limit without using the disk), a fixed path
+    such as ``/dev/zero``, ``("sidecar", bytes)`` (the rig's own sidecar replaced) or None (no file)."""
+    pose = ["pose", "{rig}", "-o", "{out}.obj", "--definitions", "{file}"]
+    animate = ["animate", "{rig}", "-o", "{out}.glb", "--capture", "{file}"]
+    lm = ["landmarks", "{head}", "-o", "{out}.landmarks.json", "--from", "{file}"]
+    out = {}
+
+    def add(name, args, what, needle, why):
+        out[name] = (args, what, Case("refused", needle, why))
+
+    add("definitions_dev_zero", pose, "/dev/zero", "device",
+        "pose --definitions /dev/zero: refused from stat, never read (was: grew to 24 GB, killed by the kernel)")
+    add("definitions_fifo", pose, "fifo", "fifo", "a FIFO no one writes to: refused, never opened (was: blocked forever)")
+    add("definitions_folder", pose, "folder", "folder", "a folder given as the definitions")
+    add("definitions_over_size", pose, ("sparse", 65 * _MEGA), "64 mb limit",
+        "a 65 MB definitions file: over the 64 MB limit for JSON (AUTOBONES_MAX_FILE_MB raises it)")
+    add("definitions_deep", pose, _deep, "nested 100000 levels",
+        "JSON nested 100k deep: refused by a scan before json.loads (was: RecursionError traceback)")
+    add("definitions_newline_name", pose, ("name", "x\ny.json", b"{}"), "x\\ny.json",
+        "a newline in the file name: the name is written as its repr, the message stays one line")
+    add("sidecar_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("sidecar", lambda: b'{"format": ' + _deep() + b"}"),
+        "nested 100001 levels", "the rig's sidecar nested 100k deep (was: RecursionError traceback)")
+    add("capture_dev_zero", animate, "/dev/zero", "device",
+        "animate --capture /dev/zero: refused from stat (was: MemoryError traceback)")
+    add("capture_fifo", animate, "fifo", "fifo", "a FIFO as the capture: refused, never opened (was: blocked forever)")
+    add("capture_over_size", animate, ("sparse", 65 * _MEGA), "64 mb limit", "a 65 MB capture CSV")
+    add("capture_1m_rows", animate, lambda: _capture(1_000_000, full=False), "more than 200000 frames",
+        "a 1M-row capture CSV: refused at frame 200,001 while read (was: 5 GB)")
+    add("capture_250k_frames", animate, lambda: _capture(250_000), "more than 200000 frames",
+        "250k real frames (35 MB, under the size limit): over the 200k-frame limit (55 min at 60 fps)")
+    add("landmarks_dev_zero", lm, "/dev/zero", "device", "landmarks --from /dev/zero")
+    add("landmarks_fifo", lm, "fifo", "fifo", "landmarks --from a FIFO: refused, never opened")
+    add("landmarks_over_size", lm, ("sparse", 17 * _MEGA), "16 mb limit", "a 17 MB landmark file: over 16 MB")
+    add("mesh_newline_name", ["place", "{file}", "-o", "{out}.glb"], ("name", "a\nb.obj", b"v 0 0 0\n"),
+        "a\\nb.obj", "a mesh whose name holds a newline (a message of io/mesh.py): the CLI writes each control "
+        "character as its escape, so the line stays one")
+    add("mesh_1e200_warnings", ["place", "{file}", "-o", "{out}.glb", "--density", "sparse"],
+        ("name", "big.obj", None), "outlier",
+        "the robot at x1e200: numpy's overflow RuntimeWarnings are held and dropped before the one-line error")
+    # argparse's own errors: one line and the command's --help (was: the usage block, 2-7 lines)
+    add("argparse_missing_value", ["place", "--density"], None, "(see autobones place --help)",
+        "an option without its value")
+    add("argparse_unknown_option", ["pose", "{rig}", "--bogus"], None, "(see autobones pose --help)",
+        "an option the command does not have")
+    add("argparse_bad_choice", ["transfer", "{head}", "--symmetric", "maybe"], None, "(see autobones transfer --help)",
+        "a value outside the choices")
+    add("argparse_missing_argument", ["animate", "{rig}", "-o", "{out}.glb"], None, "--capture",
+        "a required option missing")
+    add("no_command", [], None, "no command given", "autobones alone: one line on stderr, exit 2 (was: the help on "
+        "stdout, exit 2); autobones --help prints the help, exit 0")
+    return out
+
+
+def write_command_case(folder, name, rig):
+    """Make command case ``name``'s files in ``folder`` (the rig ``rig`` copied in as r.glb and its
+    sidecars, the robot as head.obj) and return its argument list."""
+    import shutil
+
+    args, what, _ = command_cases()[name]
+    folder = Path(folder)
+    rig = Path(rig)
+    for src in (rig, rig.with_name(rig.stem + ".rig.json"), rig.with_name(rig.stem + ".weights.npz")):
+        shutil.copy(src, folder / src.name.replace(rig.stem, "r", 1))
+    (folder / "head.obj").write_bytes(data(ROBOT).read_bytes())
+    file = folder / "bad"
+    if callable(what):  # made only when used: the captures take ~1 s to build
+        file.write_bytes(what())
+    elif what == "fifo":
+        import os
+
+        os.mkfifo(file)
+    elif what == "folder":
+        file.mkdir()
+    elif isinstance(what, str):
+        file = Path(what)
+    elif what and what[0] == "sparse":
+        with open(file, "wb") as fh:
+            fh.truncate(what[1])
+    elif what and what[0] == "sidecar":
+        (folder / "r.rig.json").write_bytes(what[1]())
+    elif what and what[0] == "name":
+        file = folder / what[1]
+        if what[2] is None:  # the robot at x1e200
+            V, F = robot()
+            file.write_bytes(obj_bytes(V * 1e200, F))
+        else:
+            file.write_bytes(what[2])
+    return [a.format(rig=folder / "r.glb", head=folder / "head.obj", file=file, out=folder / "out") for a in args]
 
 
 def write_mesh_corpus(folder):

@@ -12,12 +12,12 @@ signs follow that convention; they are not checked against a device recording.
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import AutobonesError
+from ..io.files import read_json
 from ..io.gltf import add_animation, pack_glb, read_glb
 from .names import ARKIT_NAMES
 
@@ -84,8 +84,7 @@ def capture_glb(rig_path, capture, bones=True):
     if bones and capture.angles:
         json_path = sidecar_paths(rig_path)[0]
         try:
-            with open(json_path, encoding="utf-8") as fh:
-                Rf = np.asarray(json.load(fh)["frame"]["rotation"], dtype=np.float64)
+            Rf = np.asarray(read_json(json_path, "sidecar")["frame"]["rotation"], dtype=np.float64)
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise AutobonesError(f"{json_path}: the rig's sidecar is needed for the head and eye turns "
                                  f"({type(exc).__name__}: {exc}); or animate without them (--no-bones)") from None

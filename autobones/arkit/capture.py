@@ -15,6 +15,7 @@ the file, line and column.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 import re
@@ -23,8 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AutobonesError
+from ..io.files import read_text, shown
 from .names import ARKIT_NAMES, CAPTURE_ANGLES, capture_column
 
+# frames a take may hold: 55 min at 60 fps. A row costs ~1.5 kB while read (61 fields as str): 200k
+# frames peak at ~0.4 GB and ~5 s, where a 1M-row file took 5 GB
+MAX_FRAMES = 200_000
 _TIMECODE = re.compile(r"^\s*(\d+):(\d{1,2}):(\d{1,2})[:;](\d+(?:\.\d*)?)\s*$")
 
 
@@ -65,11 +70,17 @@ def read_capture(path, fps=60.0):
     if not fps > 0 or not math.isfinite(fps):
         raise AutobonesError(f"--fps {fps}: the frame rate must be a positive number")
     known = {capture_column(n): n for n in ARKIT_NAMES}
+    text = read_text(path, "capture", encoding="utf-8-sig")  # a regular file under its size limit
+    rows = []
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise AutobonesError(f"{path}: cannot read it as a CSV file ({exc})") from None
+        for row in csv.reader(io.StringIO(text, newline="")):
+            if len(rows) > MAX_FRAMES:  # the header and MAX_FRAMES frames at most: memory grows by the row
+                raise AutobonesError(f"{shown(path)}: more than {MAX_FRAMES} frames (55 min at 60 fps); split "
+                                     "the take into shorter ones")
+            if any(c.strip() for c in row):
+                rows.append(row)
+    except csv.Error as exc:
+        raise AutobonesError(f"{shown(path)}: cannot read it as a CSV file ({exc})") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if not rows:
         raise AutobonesError(f"{path}: empty file; expected Live Link Face's CSV (Timecode, BlendShapeCount, "

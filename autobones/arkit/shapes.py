@@ -6,13 +6,13 @@ ICT-FaceKit (MIT, ``generic_rig/arkit/LICENSE``); see that script for the file l
 from __future__ import annotations
 
 import functools
-import json
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import AutobonesError
+from ..io.files import read_json
 from .folds import folded_each
 from .names import ABSENT, ARKIT_NAMES
 
@@ -71,8 +71,7 @@ def load_shapes(folder=None):
 def _load(folder, stamp):
     npz, js = os.path.join(folder, NPZ), os.path.join(folder, JSON)
     try:
-        with open(js, encoding="utf-8") as fh:
-            meta = json.load(fh)
+        meta = read_json(js, "rig", "ARKit shape set's JSON")
         with np.load(npz, allow_pickle=False) as z:
             V = z["vertices"].astype(np.float64)
             F = z["faces"].astype(np.int64)

@@ -1,11 +1,11 @@
 """Planning a batch: the meshes under the input folder and, for each, run, skip (up to date) or fail (refused)."""
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 
 from ..errors import AutobonesError
+from ..io.files import read_json
 from ..io.atomic import BACKUP_SUFFIX
 from ..io.mesh import SUPPORTED
 from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir
@@ -127,9 +127,8 @@ def _state(it, options, h, force):
 
 def _recorded_hash(sidecar):
     try:
-        with open(sidecar, encoding="utf-8") as fh:
-            return json.load(fh).get("batch", {}).get("options_hash")
-    except (OSError, ValueError, AttributeError):
+        return read_json(sidecar, "sidecar").get("batch", {}).get("options_hash")
+    except (OSError, ValueError, AttributeError, AutobonesError):  # unreadable: not ours, so never skipped
         return None
 
 

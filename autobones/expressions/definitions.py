@@ -9,10 +9,10 @@ optional key has its fallback in :data:`MODEL_DEFAULTS`, every required key is c
 from __future__ import annotations
 
 import copy
-import json
 import os
 
 from ..errors import AutobonesError
+from ..io.files import read_json
 
 # The fallbacks used when a definitions file lacks an optional ``model`` key: the values the
 # model used before the key existed, so an older user file poses as it did. The shipped
@@ -76,8 +76,7 @@ def load_expressions(path=None):
         return path
     path = os.fspath(path)
     try:
-        with open(path, encoding="utf-8") as fh:
-            doc = json.load(fh)
+        doc = read_json(path, "definitions", invalid="cannot read the expression definitions")  # bounded
         for key in ("model", "muscle_types", "action_units", "expressions"):
             doc[key]
     except (OSError, ValueError, KeyError, TypeError) as exc:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from .atomic import write_text_atomic
+from .files import read_bytes, shown
 from .landmark_checks import quoted, shorten, validate_landmarks
 from .landmark_names import BILATERAL, MIDLINE, NAME_INDEX, NAMES, mirror_name
 
@@ -57,10 +58,6 @@ IBUG68 = {
 }
 
 IBUG_COUNT = 68
-
-# Landmark files are tiny; anything larger is not one.
-MAX_FILE_BYTES = 16 * 1024**2
-
 
 # ---------------------------------------------------------------------------------------------
 # reading
@@ -107,18 +104,9 @@ def read_landmarks(path):
         needs is :func:`validate_landmarks`'s ``min_count``.
     """
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise AutobonesError(f"{path}: no such landmark file")
-    size = os.path.getsize(path)
-    if size == 0:
-        raise AutobonesError(f"{path}: the landmark file is empty")
-    if size > MAX_FILE_BYTES:
-        raise AutobonesError(f"{path}: {size / 1024**2:.0f} MiB is far too large for a landmark file")
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read()
-    except OSError as exc:
-        raise AutobonesError(f"{path}: cannot read the landmark file ({exc.strerror or exc})") from None
+    raw = read_bytes(path, "landmarks")  # a regular file (no FIFO or device), at most LIMITS["landmarks"] read
+    if not raw:
+        raise AutobonesError(f"{shown(path)}: the landmark file is empty")
     try:
         landmarks = _parse(raw, path)
     except AutobonesError:

@@ -9,13 +9,13 @@ vertices.
 """
 from __future__ import annotations
 
-import json
 import os
 import zipfile
 
 import numpy as np
 
 from ..errors import AutobonesError
+from .files import read_json
 from .gltf import read_accessor, read_glb
 from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, Rig, sidecar_attributes, sidecar_paths
@@ -133,8 +133,7 @@ def _read_autobones_glb(path):
 def _read_sidecar(json_path):
     """The ``.rig.json`` sidecar: (its dict, Skeleton, Frame, labels (n,) int8, facial mask (n,) bool)."""
     try:
-        with open(json_path, encoding="utf-8") as fh:
-            meta = json.load(fh)
+        meta = read_json(json_path, "sidecar")  # a regular file, bounded in size and depth
         if not isinstance(meta, dict) or meta.get("format") != SIDECAR_FORMAT:
             raise ValueError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
                              f"expected {SIDECAR_FORMAT!r}")

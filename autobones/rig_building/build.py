@@ -73,13 +73,13 @@ insertion) times 0.5 (cos(pi (w / width)^falloff) + 1) across it.
 """
 from __future__ import annotations
 
-import json
 import logging
 import os
 
 import numpy as np
 
 from ..errors import AutobonesError
+from ..io.files import read_json
 from ..geometry.laplacian import diffuse, laplacian
 from ..geometry.ring import RING_KINDS, ring_frame, ring_profile
 from ..geometry.smooth import step
@@ -118,8 +118,7 @@ def load_muscle_definitions(path=None):
         path = muscles_path()
     path = os.fspath(path)
     try:
-        with open(path, encoding="utf-8") as fh:
-            doc = json.load(fh)
+        doc = read_json(path, "rig", "muscle definitions")
         return list(doc["muscles"])
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise AutobonesError(f"{path}: cannot read the muscle definitions ({exc})") from None

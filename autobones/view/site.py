@@ -20,6 +20,7 @@ import numpy as np
 from ..batch.report import REPORT_FORMAT, REPORT_NAME, STATUSES
 from ..errors import AutobonesError
 from ..geometry.ring import RING_KINDS
+from ..io.files import read_json, shown as shown_name
 from ..io.rig_files import load_rig
 from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, sidecar_paths
@@ -89,11 +90,13 @@ def _read_report(root, shown):
     if not os.path.isfile(p):
         return None
     try:
-        with open(p, encoding="utf-8") as fh:
-            rep = json.load(fh)
+        rep = read_json(p, "sidecar", "batch report")  # a regular file, bounded in size and depth
         if not isinstance(rep, dict) or rep.get("format") != REPORT_FORMAT or not isinstance(rep.get("files"), list):
             raise ValueError(f"format {rep.get('format') if isinstance(rep, dict) else None!r}, "
                              f"expected {REPORT_FORMAT!r}")
+    except AutobonesError as exc:  # named as the folder was given
+        raise AutobonesError(f"{os.path.join(shown, REPORT_NAME)}: "
+                             f"{str(exc).removeprefix(shown_name(p) + ': ')}") from None
     except (OSError, ValueError) as exc:
         raise AutobonesError(f"{os.path.join(shown, REPORT_NAME)}: not a readable batch report "
                              f"({type(exc).__name__}: {exc})") from None
@@ -115,7 +118,7 @@ def glb_generator(path):
                 return None
             doc = json.loads(fh.read(length))
         return (doc.get("asset") or {}).get("generator")
-    except (OSError, ValueError, AttributeError, struct.error):
+    except (OSError, ValueError, AttributeError, struct.error, RecursionError):  # nested 100k deep: not a rig
         return None
 
 
@@ -137,8 +140,10 @@ def read_sidecar(glb_path):
     """The ``.rig.json`` sidecar of ``glb_path`` as a dict; AutobonesError when missing or unreadable."""
     json_path = sidecar_paths(glb_path)[0]
     try:
-        with open(json_path, encoding="utf-8") as fh:
-            meta = json.load(fh)
+        meta = read_json(json_path, "sidecar")  # a regular file, bounded in size and depth
+    except AutobonesError as exc:  # named as the listing names it, by the file's base name
+        raise AutobonesError(f"{os.path.basename(json_path)}: cannot read the sidecar "
+                             f"({str(exc).removeprefix(shown_name(json_path) + ': ')})") from None
     except (OSError, ValueError) as exc:
         raise AutobonesError(f"{os.path.basename(json_path)}: cannot read the sidecar ({type(exc).__name__}: "
                              f"{exc})") from None

@@ -1,0 +1,218 @@
+"""Hostile file arguments and one-line errors (issue #33): every case of ``bad_inputs.command_cases``
+through the CLI as a subprocess, and the bounded reader of ``autobones.io.files`` on its own."""
+import io
+import json
+import os
+import stat
+import subprocess
+import sys
+import warnings
+
+import pytest
+
+import bad_inputs
+from shared_data import ROOT, data
+
+CLI = [sys.executable, "-m", "cli.main"]
+CASES = bad_inputs.command_cases()
+
+
+@pytest.fixture(scope="module")
+def placed_rig(tmp_path_factory):
+    """A saved place rig of the robot head (sparse: ~2 s): the rig the cases pose and animate."""
+    import autobones
+
+    folder = tmp_path_factory.mktemp("rig")
+    autobones.place(data(bad_inputs.ROBOT), density="sparse").save(folder / "robot.glb")
+    return folder / "robot.glb"
+
+
+def _snapshot(folder):
+    """Every entry under ``folder``: a regular file's bytes, else its type (a FIFO is never opened)."""
+    out = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            p = os.path.join(root, name)
+            mode = os.lstat(p).st_mode
+            out[os.path.relpath(p, folder)] = open(p, "rb").read() if stat.S_ISREG(mode) else stat.S_IFMT(mode)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, name):
+    args = bad_inputs.write_command_case(tmp_path, name, placed_rig)
+    case = CASES[name][2]
+    before = _snapshot(tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("AUTOBONES_MAX_FILE_MB", None)
+    # a FIFO must be refused, not waited on: 60 s is far beyond any case's own time (~1-3 s)
+    r = subprocess.run(CLI + args, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    lines = r.stderr.splitlines()
+    assert r.returncode == 2, (name, r.returncode, r.stderr)
+    assert len(lines) == 1 and r.stderr.endswith("\n"), (name, r.stderr)
+    assert lines[0].startswith("autobones") and "error:" in lines[0], r.stderr
+    assert case.needle.lower() in lines[0].lower(), (name, lines[0], case.needle)
+    assert "Traceback" not in r.stderr and "Warning" not in r.stderr and r.stdout == "", (r.stdout, r.stderr)
+    assert _snapshot(tmp_path) == before, f"{name}: a file was written or changed"
+
+
+def test_help_is_still_the_full_help_on_stdout():
+    r = subprocess.run(CLI + ["--help"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stderr == ""
+    assert "usage: autobones" in r.stdout and all(c in r.stdout for c in ("place", "transfer", "animate"))
+
+
+def test_the_corpus_covers_the_issue():
+    """Each case the issue names is in the corpus, refused, with a reason for the README."""
+    for name in ("definitions_dev_zero", "capture_dev_zero", "definitions_fifo", "capture_fifo",
+                 "capture_1m_rows", "definitions_deep", "sidecar_deep", "mesh_newline_name", "mesh_1e200_warnings",
+                 "no_command", "argparse_missing_value"):
+        assert CASES[name][2].expect == "refused" and CASES[name][2].why, name
+
+
+# --------------------------------------------------------------------------------------------------
+# autobones.io.files on its own
+
+def test_the_reader_never_takes_more_than_the_limit(tmp_path, monkeypatch):
+    """A file that says it is empty (/proc) or grows after the size check is cut at limit + 1 bytes."""
+    from autobones.errors import AutobonesError
+    from autobones.io import files
+
+    monkeypatch.setenv(files.LIMIT_ENV, str(4096 / files.MB))  # 4 kB
+    read = []
+    real = os.read
+    monkeypatch.setattr(files.os, "read", lambda fd, n: read.append(n) or real(fd, n))
+    p = tmp_path / "grows.json"
+    p.write_bytes(b"[" + b"0," * 100_000 + b"0]")
+    monkeypatch.setattr(files.os, "stat", lambda path: os.stat_result((stat.S_IFREG | 0o644,) + (0,) * 9))
+    with pytest.raises(AutobonesError, match=r"over the 0.00390625 MB limit .*AUTOBONES_MAX_FILE_MB"):
+        files.read_bytes(p, "definitions")
+    assert sum(read) == 4097
+    monkeypatch.undo()
+    assert os.stat("/proc/self/status").st_size == 0  # the kernel's files report no size
+    monkeypatch.setenv(files.LIMIT_ENV, str(64 / files.MB))
+    with pytest.raises(AutobonesError, match="more than that"):
+        files.read_bytes("/proc/self/status", "definitions")
+
+
+def test_the_limit_env_must_be_a_size(monkeypatch, tmp_path):
+    from autobones.errors import AutobonesError
+    from autobones.io import files
+
+    (tmp_path / "a.json").write_text("[]")
+    for bad in ("lots", "-1", "inf", "nan", "0"):
+        monkeypatch.setenv(files.LIMIT_ENV, bad)
+        with pytest.raises(AutobonesError, match=files.LIMIT_ENV):
+            files.read_json(tmp_path / "a.json", "definitions")
+    monkeypatch.setenv(files.LIMIT_ENV, "0.5")
+    assert files.read_json(tmp_path / "a.json", "definitions") == []
+
+
+def test_json_depth_skips_strings():
+    from autobones.io.files import json_depth
+
+    assert json_depth(b"1") == 0 and json_depth(b"[]") == 1 and json_depth(b'{"a": [[1], {"b": []}]}') == 4
+    assert json_depth(b"[[1], [2], [[3]]]") == 3  # siblings do not add up
+    assert json_depth(b'["[[[[", "\\"[[[", {"{": "]]]]]"}]') == 2  # brackets and escaped quotes in strings
+    assert json_depth(b"[" * 100_000 + b"]" * 100_000) == 100_000
+
+
+def test_every_json_autobones_writes_or_ships_is_well_inside_the_limits(placed_rig):
+    """The built-in definitions, rig folder and a saved sidecar: far under 64 levels and 64 MB, so the
+    limits refuse only damaged files."""
+    from autobones.generic_rig import default_rig_path, expressions_path
+    from autobones.io.files import MAX_JSON_DEPTH, json_depth, read_json
+
+    paths = [expressions_path(), placed_rig.with_name("robot.rig.json")]
+    paths += [os.path.join(default_rig_path(), f) for f in os.listdir(default_rig_path()) if f.endswith(".json")]
+    for p in paths:
+        raw = open(p, "rb").read()
+        assert json_depth(raw) <= 8 < MAX_JSON_DEPTH and len(raw) < 8 * 1024**2, p
+        assert read_json(p, "sidecar") == json.loads(raw)
+
+
+def test_a_capture_at_the_frame_limit_is_read(tmp_path, monkeypatch):
+    """A take of exactly the frame limit is read; one frame more is refused (the limit lowered to 1000
+    here: 200k frames take ~5 s to parse)."""
+    from autobones.arkit import capture
+    from autobones.arkit.capture import read_capture
+    from autobones.errors import AutobonesError
+
+    assert capture.MAX_FRAMES == 200_000
+    monkeypatch.setattr(capture, "MAX_FRAMES", 1000)
+    MAX_FRAMES = 1000
+    text = bad_inputs._capture(MAX_FRAMES).decode()
+    (tmp_path / "a.csv").write_text(text)
+    assert len(read_capture(tmp_path / "a.csv").times) == MAX_FRAMES
+    (tmp_path / "b.csv").write_text(text + f"{MAX_FRAMES}" + text.splitlines()[-1][len(str(MAX_FRAMES - 1)):] + "\n")
+    with pytest.raises(AutobonesError, match="more than 1000 frames"):
+        read_capture(tmp_path / "b.csv")
+
+
+def _main(monkeypatch, capsys, command):
+    from cli import main as cli_main
+
+    monkeypatch.setitem(cli_main.COMMANDS, "place", command)
+    code = cli_main.main(["place"])
+    return code, capsys.readouterr()
+
+
+def test_warnings_before_an_error_are_dropped_after_a_result_shown(monkeypatch, capsys):
+    from autobones.errors import AutobonesError
+
+    def fails(args):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        raise AutobonesError("x.obj: an outlier")
+
+    def works(args):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        print("x.glb: done")
+        return 0
+
+    code, out = _main(monkeypatch, capsys, fails)
+    assert code == 2 and out.err == "autobones place: error: x.obj: an outlier\n" and out.out == ""
+    with pytest.warns(RuntimeWarning, match="overflow"):
+        code, out = _main(monkeypatch, capsys, works)
+    assert code == 0 and out.out == "x.glb: done\n"
+
+
+def test_control_characters_in_a_message_are_escaped(monkeypatch, capsys):
+    from autobones.errors import AutobonesError
+
+    def fails(args):
+        raise AutobonesError("a\nb\r\x1b[2J.obj: no faces")
+
+    code, out = _main(monkeypatch, capsys, fails)
+    assert code == 2 and out.err == "autobones place: error: a\\nb\\r\\x1b[2J.obj: no faces\n"
+
+
+def test_debug_still_raises(monkeypatch, capsys):
+    from autobones.errors import AutobonesError
+    from cli import main as cli_main
+
+    def fails(args):
+        raise AutobonesError("x")
+
+    monkeypatch.setitem(cli_main.COMMANDS, "place", fails)
+    with pytest.raises(AutobonesError):
+        cli_main.main(["place", "--debug"])
+
+
+def test_view_folder_lists_past_a_deep_sidecar_and_a_deep_glb(tmp_path, placed_rig):
+    """One rig nested 100k deep in its sidecar, another in its glb's JSON chunk: `view FOLDER` still lists
+    the good rig; the first is shown unviewable, the second is not a rig (was: RecursionError, no page)."""
+    import shutil
+    import struct
+
+    from autobones.view.site import batch_listing, open_site
+
+    for stem in ("good", "deep_sidecar"):
+        for suffix in (".glb", ".rig.json", ".weights.npz"):
+            shutil.copy(placed_rig.with_name("robot" + suffix), tmp_path / (stem + suffix))
+    (tmp_path / "deep_sidecar.rig.json").write_bytes(b"[" * 100_000 + b"]" * 100_000)
+    chunk = b"[" * 100_000 + b"]" * 100_000
+    (tmp_path / "deep_glb.glb").write_bytes(b"glTF" + struct.pack("<II", 2, 20 + len(chunk))
+                                            + struct.pack("<I4s", len(chunk), b"JSON") + chunk)
+    listing = {f["output"]: f for f in batch_listing(open_site(tmp_path))["files"]}
+    assert sorted(listing) == ["deep_sidecar.glb", "good.glb"]
+    assert listing["good.glb"]["viewable"] and not listing["deep_sidecar.glb"]["viewable"]
