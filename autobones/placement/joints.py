@@ -55,6 +55,7 @@ PIVOT_BACK = 0.34        # of the section's depth at the pivot, from its back (0
 PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of its back (0.39-0.44)
 PIVOT_DOWN_MASK = 0.71   # a face mask: of its height below its top (vertex-menton: 0.70-0.72)
 PIVOT_BEHIND_MASK = 0.58  # a face mask: of its height behind its front (0.55-0.58)
+MASK_CHIN = 0.7          # a face mask's chin step lies at least this share of its height below its top
 CHIN_CUT = 0.1          # of the height: a chin this close to the bottom is where the mesh ends
 MENTON_DEPTHS = 1.2    # vertex-menton in head depths, when no chin step is found (Farkas 1994)
 SLAB = 0.02            # head sizes: height of a profile slab
@@ -176,10 +177,13 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
     if face_mask:
         # no back to measure the head's length on: vertex-menton from the chin step, else the
         # mask's height (a mask spans about vertex to menton); the pivot lies far behind the mask
-        scale = top - float(chin) if chin is not None else height
+        # (a step found in the mask's upper part is the nose or the lips of a face strip cut at the
+        # brow and the chin, not its chin: fran_cut's, upright, at 0.54 of its height)
+        by_chin = chin is not None and top - float(chin) >= MASK_CHIN * height
+        scale = top - float(chin) if by_chin else height
         y_head = top - PIVOT_DOWN_MASK * scale
         z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * scale
-        head_cues += ["face_only"] + (["chin"] if chin is not None else [])
+        head_cues += ["face_only"] + (["chin"] if by_chin else [])
     else:
         # the head's height scale is its length, front to back (vertex-menton is about the head's
         # length on a human), or its height down to the chin when the mesh ends there and that is

@@ -52,7 +52,7 @@ CHUNK = 65536
 
 
 def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, faces=None, band=FACIAL_BAND,
-                     chin=None, face_only=False, prune=0.01):
+                     chin=None, face_only=False, prune=0.01, cut=None):
     """Restrict bone-heat weights to stay local (module docstring); in place, and returned.
 
     Parameters
@@ -74,7 +74,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
         stray loose vertex does not move the neck base).
     band : float
         Blend band around the facial mask, head sizes.
-    chin, face_only
+    chin, face_only, cut
         The boundary's and the neck base's options, see :func:`head_share`.
     prune : float
         Weights below this fraction of their row's largest are zeroed afterwards (0: none).
@@ -110,7 +110,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
 
     # 2. the head's share (head and facial bones) from the boundary through the pivot, and all of the
     # face and its band (a long muzzle hangs below any plane through the pivot); the rest is neck
-    share = head_share(C, joint, faces=faces, chin=chin, face_only=face_only, face=hold)
+    share = head_share(C, joint, faces=faces, chin=chin, face_only=face_only, face=hold, cut=cut)
     others = np.array([j for j in range(b) if j != neck], dtype=np.int64)
     head_col = int(np.flatnonzero(others == head)[0])
     for s in range(0, n, CHUNK):
@@ -132,7 +132,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
 
 
 def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
-               neck_base=NECK_BASE, neck_rise=NECK_RISE):
+               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None):
     """The head's share of each vertex (step 2 of the module docstring): (n,) in [0, 1].
 
     Parameters
@@ -157,6 +157,13 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         height from the neck base to the joint).
     neck_base, neck_rise : float
         See the module docstring.
+    cut : ((3,) float, (3,) float), optional
+        A planar neck cut's centre and unit normal (pointing out of the mesh, canonical frame;
+        :func:`autobones.cut_cues.cut_cues`): the vertices within ``neck_base`` of the height from it
+        are neck base too, the head's share rising over the next ``neck_rise`` of the way to the
+        joint. A cut slanted to the head's up (an animal's neck leaves its skull backwards: the
+        cow's by 39 degrees) puts some of its edge above the lowest heights, which a head turn then
+        dragged.
     """
     C = np.asarray(C, dtype=np.float64)
     y, z = C[:, 1], C[:, 2]
@@ -170,6 +177,13 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
     rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+    if cut is not None and not face_only:
+        centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
+        above = (C - centre) @ -normal
+        top = float((np.asarray(joint, dtype=np.float64) - centre) @ -normal)
+        low = neck_base * float(np.ptp(used))
+        if top > low:
+            rise = rise * smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
     share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
     if face is not None:
         # a face-only mesh's lowest vertices are its chin, which turns with the head; a neck's base
