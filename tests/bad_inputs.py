@@ -255,10 +255,13 @@ def command_cases():
         "animate --capture /dev/zero: refused from stat (was: MemoryError traceback)")
     add("capture_fifo", animate, "fifo", "fifo", "a FIFO as the capture: refused, never opened (was: blocked forever)")
     add("capture_over_size", animate, ("sparse", 65 * _MEGA), "64 mb limit", "a 65 MB capture CSV")
-    add("capture_1m_rows", animate, lambda: _capture(1_000_000, full=False), "more than 200000 frames",
-        "a 1M-row capture CSV: refused at frame 200,001 while read (was: 5 GB)")
+    add("capture_1m_frames", animate, lambda: _capture(1_000_000), "64 mb limit",
+        "a 1M-frame capture CSV (126 MB): over the 64 MB limit, refused from stat (was: 5 GB read)")
+    add("capture_1m_short_rows", animate, lambda: _capture(1_000_000, full=False), "more than 200000 frames",
+        "a 1M-row CSV of one field per row (7 MB, under the size limit): refused at row 200,001 while read, "
+        "before any row is parsed")
     add("capture_250k_frames", animate, lambda: _capture(250_000), "more than 200000 frames",
-        "250k real frames (35 MB, under the size limit): over the 200k-frame limit (55 min at 60 fps)")
+        "250k real frames (31 MB, under the size limit): over the 200k-frame limit (55 min at 60 fps)")
     add("landmarks_dev_zero", lm, "/dev/zero", "device", "landmarks --from /dev/zero")
     add("landmarks_fifo", lm, "fifo", "fifo", "landmarks --from a FIFO: refused, never opened")
     add("landmarks_over_size", lm, ("sparse", 17 * _MEGA), "16 mb limit", "a 17 MB landmark file: over 16 MB")

@@ -65,7 +65,7 @@ def test_help_is_still_the_full_help_on_stdout():
 def test_the_corpus_covers_the_issue():
     """Each case the issue names is in the corpus, refused, with a reason for the README."""
     for name in ("definitions_dev_zero", "capture_dev_zero", "definitions_fifo", "capture_fifo",
-                 "capture_1m_rows", "definitions_deep", "sidecar_deep", "mesh_newline_name", "mesh_1e200_warnings",
+                 "capture_1m_frames", "definitions_deep", "sidecar_deep", "mesh_newline_name", "mesh_1e200_warnings",
                  "no_command", "argparse_missing_value"):
         assert CASES[name][2].expect == "refused" and CASES[name][2].why, name
 

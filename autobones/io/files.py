@@ -39,7 +39,7 @@ KIND_NAMES = {"definitions": "expression definitions", "capture": "capture CSV",
               "rig": "rig JSON file", "landmarks": "landmark file"}
 # one override for every kind, in MB: a studio with a larger file raises it for one run
 LIMIT_ENV = "AUTOBONES_MAX_FILE_MB"
-# no file autobones writes or reads nests deeper than 6; 64 leaves room for users' own extras
+# what autobones ships or writes nests at most 7 deep (a transferred sidecar); 64 leaves room for users' extras
 MAX_JSON_DEPTH = 64
 _CHUNK = 1 << 20
 
@@ -82,8 +82,15 @@ def _refuse_not_regular(path, what, mode):
                          "(copy a stream to a file first)")
 
 
+def _a(what):
+    """``what`` with its article: "a capture CSV", "an autobones sidecar", "expression definitions"."""
+    if what.endswith("definitions"):
+        return what
+    return ("an " if what[0].lower() in "aeiou" else "a ") + what
+
+
 def _too_large(path, what, kind, size_text):
-    return AutobonesError(f"{shown(path)}: {size_text}, over the {limit_bytes(kind) / MB:g} MB limit for a {what} "
+    return AutobonesError(f"{shown(path)}: {size_text}, over the {limit_bytes(kind) / MB:g} MB limit for {_a(what)} "
                           f"(set {LIMIT_ENV} to raise it, e.g. {LIMIT_ENV}=256)")
 
 
@@ -165,17 +172,17 @@ def json_depth(raw):
 def check_json_depth(raw, path, what, max_depth=MAX_JSON_DEPTH):
     depth = json_depth(raw)
     if depth > max_depth:
-        raise AutobonesError(f"{shown(path)}: JSON nested {depth} levels deep, where a {what} has at most "
-                             f"{max_depth}; the file is damaged or is not a {what}")
+        raise AutobonesError(f"{shown(path)}: JSON nested {depth} levels deep, more than the {max_depth} autobones "
+                             f"reads in {_a(what)}; the file is damaged or is not {_a(what)}")
 
 
 def read_json(path, kind, what=None, invalid=None, **loads_kwargs):
     """The JSON document in ``path``: a regular file under its kind's size limit, UTF-8 (a BOM is
     allowed), nested at most :data:`MAX_JSON_DEPTH` deep; AutobonesError naming the file otherwise.
-    ``invalid`` starts the message on bad JSON (default ``not a readable WHAT``); ``loads_kwargs`` go
+    ``invalid`` starts the message on bad JSON (default ``not readable as a WHAT``); ``loads_kwargs`` go
     to :func:`json.loads` (``object_pairs_hook``, ``parse_constant``)."""
     what = what or KIND_NAMES[kind]
-    invalid = invalid or f"not a readable {what}"
+    invalid = invalid or f"not readable as {_a(what)}"
     raw = read_bytes(path, kind, what)
     check_json_depth(raw, path, what)
     try:

@@ -133,7 +133,7 @@ def _read_autobones_glb(path):
 def _read_sidecar(json_path):
     """The ``.rig.json`` sidecar: (its dict, Skeleton, Frame, labels (n,) int8, facial mask (n,) bool)."""
     try:
-        meta = read_json(json_path, "sidecar")  # a regular file, bounded in size and depth
+        meta = read_json(json_path, "sidecar", invalid="not a readable autobones sidecar")  # bounded, depth checked
         if not isinstance(meta, dict) or meta.get("format") != SIDECAR_FORMAT:
             raise ValueError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
                              f"expected {SIDECAR_FORMAT!r}")
