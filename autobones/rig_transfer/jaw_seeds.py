@@ -161,9 +161,7 @@ def mouth_frame(landmarks):
                  half_width=0.5 * float(np.linalg.norm(cl - cr)))
     frame["lift"], frame["lift_at"] = _front_lift(lm, frame)
     # rounding the coordinates (a float32 glTF) must not move a vertex across the surface
-    # (of the landmarks' distance from the origin: their largest coordinate would turn with the axes)
-    frame["tol"] = ON_SURFACE * max(float(np.linalg.norm(np.array([st, cl, cr]), axis=1).max()),
-                                    2.0 * frame["half_width"])
+    frame["tol"] = ON_SURFACE * max(float(np.abs(np.r_[st, cl, cr]).max()), 2.0 * frame["half_width"])
     return frame
 
 
@@ -183,11 +181,8 @@ def _lip_sides(V, mouth, band, behind):
     ``behind`` and within the mouth's half-width plus ``behind`` of the midline (mesh units)."""
     d = V - mouth["mid"]
     s = mouth_height(V, mouth)
-    # the corners' vertices sit on the zone's sides: a margin keeps rounding (a turned file) from
-    # moving them in or out
-    tol = mouth["tol"]
-    zone = ((d @ mouth["forward"] > -behind - tol)
-            & (np.abs(d @ mouth["lateral"]) < mouth["half_width"] + behind + tol) & (np.abs(s) < band))
+    zone = ((d @ mouth["forward"] > -behind) & (np.abs(d @ mouth["lateral"]) < mouth["half_width"] + behind)
+            & (np.abs(s) < band))
     return np.where(zone, np.where(s > mouth["tol"], 1, -1), 0).astype(np.int8)
 
 
