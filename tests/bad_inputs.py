@@ -227,10 +227,17 @@ def _deep(n=100_000):
     return b"[" * n + b"]" * n
 
 
+def _deep_glb():
+    """A glb header and one JSON chunk nested 100k deep."""
+    chunk = _deep()
+    return b"glTF" + struct.pack("<II", 2, 20 + len(chunk)) + struct.pack("<I4s", len(chunk), b"JSON") + chunk
+
+
 def command_cases():
     """{name: (args, what {file} is, Case)}: ``what`` is a function giving the bytes to write, ``"fifo"``, ``"folder"``,
     ``("sparse", n)`` (a sparse file of n bytes: over a limit without using the disk), a fixed path
-    such as ``/dev/zero``, ``("sidecar", bytes)`` (the rig's own sidecar replaced) or None (no file)."""
+    such as ``/dev/zero``, ``("sidecar", f)`` / ``("glb", f)`` (the rig's own file replaced by ``f()``),
+    ``("name", file name, bytes or None)`` or None (no file)."""
     pose = ["pose", "{rig}", "-o", "{out}.obj", "--definitions", "{file}"]
     animate = ["animate", "{rig}", "-o", "{out}.glb", "--capture", "{file}"]
     lm = ["landmarks", "{head}", "-o", "{out}.landmarks.json", "--from", "{file}"]
@@ -251,6 +258,8 @@ def command_cases():
         "a newline in the file name: the name is written as its repr, the message stays one line")
     add("sidecar_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("sidecar", lambda: b'{"format": ' + _deep() + b"}"),
         "nested 100001 levels", "the rig's sidecar nested 100k deep (was: RecursionError traceback)")
+    add("glb_json_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("glb", _deep_glb), "nested too deeply",
+        "the rig's glb with its JSON chunk nested 100k deep (was: RecursionError traceback)")
     add("capture_dev_zero", animate, "/dev/zero", "device",
         "animate --capture /dev/zero: refused from stat (was: MemoryError traceback)")
     add("capture_fifo", animate, "fifo", "fifo", "a FIFO as the capture: refused, never opened (was: blocked forever)")
@@ -310,8 +319,8 @@ def write_command_case(folder, name, rig):
     elif what and what[0] == "sparse":
         with open(file, "wb") as fh:
             fh.truncate(what[1])
-    elif what and what[0] == "sidecar":
-        (folder / "r.rig.json").write_bytes(what[1]())
+    elif what and what[0] in ("sidecar", "glb"):  # the rig's own file replaced
+        (folder / ("r.rig.json" if what[0] == "sidecar" else "r.glb")).write_bytes(what[1]())
     elif what and what[0] == "name":
         file = folder / what[1]
         if what[2] is None:  # the robot at x1e200

@@ -68,6 +68,9 @@ def capture_glb(rig_path, capture, bones=True):
         doc, body = read_glb(rig_path)
     except (OSError, ValueError) as exc:
         raise AutobonesError(f"{rig_path}: cannot read it as a glb ({exc})") from None
+    except RecursionError:  # read_glb's json.loads on a JSON chunk nested 100k deep
+        raise AutobonesError(f"{rig_path}: cannot read it as a glb (its JSON chunk is nested too deeply: a "
+                             "damaged file)") from None
     meshes = doc.get("meshes") or [{}]
     names = list((meshes[0].get("extras") or {}).get("targetNames", []))
     missing = [n for n in ARKIT_NAMES if n not in names]

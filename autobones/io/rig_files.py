@@ -123,6 +123,9 @@ def _read_autobones_glb(path):
         doc, body = read_glb(path)
     except (OSError, ValueError) as exc:
         raise AutobonesError(f"{path}: cannot read it as a glb ({exc})") from None
+    except RecursionError:  # read_glb's json.loads on a JSON chunk nested 100k deep
+        raise AutobonesError(f"{path}: cannot read it as a glb (its JSON chunk is nested too deeply: a damaged "
+                             "file)") from None
     asset = doc.get("asset") or {}
     if asset.get("generator") != "autobones":
         raise AutobonesError(f"{path}: not a rig written by autobones (generator {asset.get('generator')!r}); "
