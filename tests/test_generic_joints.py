@@ -6,17 +6,23 @@ inferior; the mandibular condyle sits 10-15 mm anterior of the canal at its heig
 scaled by the head's ex-ex / 90 mm. The positions are computed here from the landmarks directly, not
 through :func:`autobones.rig_building.build.anatomical_joints`, so a wrong constant there fails.
 """
+import os
+
 import numpy as np
 import pytest
 
 import autobones
-from autobones.generic_rig import default_rig_path
+from autobones.generic_rig import default_head_path, default_rig_path
 from autobones.geometry.rotations import similarity
 from autobones.io.landmarks import read_landmarks
 from autobones.io.mesh import load_mesh
 from autobones.labelled_rig import LabelledRig
 
 from shared_data import data
+
+
+def default_landmarks_path():
+    return os.path.join(os.path.dirname(default_head_path()), "default_head.landmarks.json")
 
 
 def chancey(lm):
@@ -114,3 +120,36 @@ def test_jaw_opening_follows_ict_jaw_open_about_the_new_hinge():
         back = lambda v: np.degrees(np.arctan2(-v[2], -v[1]))  # noqa: E731  degrees behind straight down
         assert d[1] < 0 and t[1] < 0
         assert abs(back(d) - back(t)) < 7.0, (name, back(d), back(t))
+
+
+@pytest.fixture(scope="module")
+def stretched():
+    # the default head with a longer back of the skull and a longer neck: the dense warp follows
+    # the shape, the occiput-C1 centre stays where the ear canals say
+    V, F = load_mesh(default_head_path())
+    lm = read_landmarks(default_landmarks_path())
+
+    def warp(P):
+        P = np.array(P, dtype=np.float64)
+        P[:, 2] = np.where(P[:, 2] < 0, 1.4 * P[:, 2], P[:, 2])
+        P[:, 1] = np.where(P[:, 1] < 0.05, 0.05 + 1.5 * (P[:, 1] - 0.05), P[:, 1])
+        return P
+
+    marks = {k: warp(v[None])[0] for k, v in lm.items()}
+    return autobones.transfer((warp(V), F), marks), marks
+
+
+def test_transfer_anchors_head_and_jaw_at_the_ears(stretched):
+    rig, lm = stretched
+    assert rig.options["joints_from_ears"] == ["head", "jaw"]
+    head, jaw, ex = chancey(lm)
+    assert np.linalg.norm(joint(rig.skeleton, "head") - head) < 0.02 * ex
+    assert np.linalg.norm(joint(rig.skeleton, "jaw") - jaw) < 0.02 * ex
+    # the neck bone still ends where the head bone starts
+    sk = rig.skeleton
+    assert np.allclose(sk.tails[list(sk.names).index("neck")], joint(sk, "head"))
+
+
+def test_transfer_without_ear_landmarks_keeps_the_carried_joints(ict):
+    rig, _ = ict
+    assert rig.options["joints_from_ears"] == []

@@ -10,7 +10,9 @@ Different Face Models", §3.7 for the whole method); one module a stage:
    every generic vertex gets its point on the head (a dense correspondence);
 3. under-skin points (under_skin): a second TPS, fitted on a well-spread subsample of
    that correspondence, carries the skeleton and the muscle origins (their §3.4);
-   muscle insertions ride the correspondence itself;
+   muscle insertions ride the correspondence itself; on a head with tragions the
+   ``head`` and ``jaw`` joints then sit where the generic's do relative to its ear
+   canals (:func:`anchor_joints_at_the_ears`; Chancey et al. 2007);
 4. attributes (fields, eyes): skin weights, region labels and every other field land on
    the head's own vertices, with unreliable matches inpainted; eyeballs follow the eye bones;
 5. the result is a :class:`autobones.rig.Rig`, saved as the same skinned glTF as ``place``
@@ -227,6 +229,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
+    # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
+    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is
+    skeleton, from_ears = anchor_joints_at_the_ears(skeleton, generic, {n: lm[n] for n in shared}, V, F)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -247,6 +252,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "detected" if detected is not None else "given",
                "rig": rig_option,
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
+               "joints_from_ears": from_ears,
                "symmetric": symmetry.record_,
                **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
     out = Rig(
@@ -265,6 +271,86 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         out.options["arkit"] = True
         lap("arkit")
     return out
+
+
+EAR_LANDMARKS = ("tragion_l", "tragion_r", "exocanthion_l", "exocanthion_r")
+
+
+def anchor_joints_at_the_ears(skeleton, generic, landmarks, V, F, names=("head", "jaw")):
+    """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to its ear canals.
+
+    The generic rig's joints are placed from its tragions (the occiput-C1 centre of rotation and the
+    condyles; Chancey, Ottaviano, Myers & Nightingale 2007, :mod:`autobones.rig_building.anatomy`).
+    The dense warp carries them by the whole head's shape, which on the zoo's SMPL heads put the
+    head joint 0.08-0.13 ex-ex off and the jaw 0.05-0.08. Here each joint is the head's tragion
+    midpoint plus the generic's offset from its own, turned by the landmarks' similarity (Umeyama
+    1991) and scaled by the ex-ex ratio (the measurement's own scaling): 0.03-0.05 and 0.01-0.02
+    ex-ex there. A joint that would fall outside the head (winding number below 1/2) is moved back
+    toward the carried one until inside, or left where the warp put it.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The carried skeleton, head frame.
+    generic : LabelledRig
+        The generic rig (its ``skeleton`` and ``landmarks``, its own frame).
+    landmarks : dict str -> (3,) float
+        The head's landmarks shared with the generic rig, head frame; without both tragions and
+        both exocanthions nothing moves.
+    V, F : (n, 3) float, (m, 3) int
+        The head.
+    names : tuple of str
+        Joints to anchor.
+
+    Returns
+    -------
+    (Skeleton, list of str)
+        The skeleton (a parent bone whose tail was at a moved joint follows it) and the joints moved.
+    """
+    from ..geometry.rotations import similarity
+    from ..skeleton import Skeleton
+
+    G = generic.landmarks
+    if not all(n in landmarks and n in G for n in EAR_LANDMARKS):
+        return skeleton, []
+    shared = [n for n in landmarks if n in G]
+    P = np.array([G[n] for n in shared], dtype=np.float64)
+    Q = np.array([landmarks[n] for n in shared], dtype=np.float64)
+    _, R = similarity(P, Q)
+
+    def ears(L):
+        L = {n: np.asarray(L[n], dtype=np.float64) for n in EAR_LANDMARKS}
+        return 0.5 * (L["tragion_l"] + L["tragion_r"]), float(np.linalg.norm(L["exocanthion_l"] - L["exocanthion_r"]))
+
+    (ear_g, ex_g), (ear_t, ex_t) = ears(G), ears(landmarks)
+    heads, tails = np.array(skeleton.heads, dtype=np.float64), np.array(skeleton.tails, dtype=np.float64)
+    bones, gbones = list(skeleton.names), list(generic.skeleton.names)
+    size = float(np.ptp(V, axis=0).max())
+    moved = []
+    for name in (n for n in names if n in bones and n in gbones):
+        i = bones.index(name)
+        want = ear_t + (ex_t / ex_g) * (R @ (np.asarray(generic.skeleton.heads[gbones.index(name)]) - ear_g))
+        p = _inside_toward(V, F, want, heads[i])
+        if p is None:
+            continue
+        # the bone ending at this joint (the neck's tail at the head joint) keeps meeting it
+        tails[np.linalg.norm(tails - heads[i], axis=1) <= 1e-9 * size] = p
+        heads[i] = p
+        moved.append(name)
+    return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), moved
+
+
+def _inside_toward(V, F, p, anchor, steps=20):
+    """``p`` (3,) if inside the head, else the first point inside on the way to ``anchor`` (3,), else
+    None. Inside: a winding number above 1/2, or at least the anchor's own where that is lower (an
+    open mouth or neck lowers it around a joint that is inside all the same)."""
+    import igl
+
+    Q = p + np.linspace(0.0, 1.0, steps + 1)[:, None] * (anchor - p)
+    w = igl.fast_winding_number(np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64),
+                                np.ascontiguousarray(Q))
+    inside = np.flatnonzero(w > min(0.5, w[-1] - 1e-9))
+    return Q[inside[0]] if len(inside) and inside[0] < steps else None
 
 
 def _head_landmarks(V, F, source, landmarks, generic, up, front):
