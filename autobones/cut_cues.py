@@ -57,6 +57,7 @@ def _main_loop(Vw, rim, cues):
     w = cues["rim_length"][edge_comp == best]
     mid = w @ pts / w.sum()
     d = pts - mid
+    d = d / max(float(np.abs(d).max()), 1e-300)  # unit-free: moments of a head in 1e150 units overflowed
     evals, evecs = np.linalg.eigh((d * w[:, None]).T @ d / w.sum())
     normal = evecs[:, 0]
     surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)

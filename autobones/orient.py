@@ -353,6 +353,7 @@ def _shape_starts(P, tree, lines=96, keep=4, spread=20.0):
     ``spread`` degrees apart kept. A coarse look over every direction: the 13 cube directions of
     that frame missed the cat's plane when it was turned (0.11 against its 0.05)."""
     c = P - P.mean(axis=0)
+    c = c / max(float(np.abs(c).max()), 1e-300)  # unit-free: a head in 1e150 units overflowed the moments
     _, E = np.linalg.eigh(c.T @ c)
     E = E * np.where(((c @ E) ** 3).sum(axis=0) < 0, -1.0, 1.0)
     k = np.arange(lines) + 0.5  # a Fibonacci half-sphere: the lines, n and -n alike
@@ -395,12 +396,13 @@ def _pattern_search(score, n, step=6.0, smallest=0.25):
 def _shape_candidates(P, normal, cues, steps=12):
     """Signed (up, front) pairs for a head turned in its file: ``steps`` directions round the
     symmetry plane, from the main cut's far side (a neck cut or a bust base: see
-    :func:`_main_loop`) or, with none, the sample's longest in-plane axis; plus any input axis that
+    :func:`autobones.cut_cues.cut_cues`) or, with none, the sample's longest in-plane axis; plus any input axis that
     lies in the plane (a head turned about its up axis keeps that axis as a candidate)."""
     ref = cues["loop_normal"] if cues is not None and cues["loop_normal"] is not None else None
     if ref is None or np.linalg.norm(ref - (ref @ normal) * normal) < 0.3:
         c = P - P.mean(axis=0)
         c = c - np.outer(c @ normal, normal)
+        c = c / max(float(np.abs(c).max()), 1e-300)
         _, E = np.linalg.eigh(c.T @ c)
         ref = E[:, 2]
     a = ref - (ref @ normal) * normal
