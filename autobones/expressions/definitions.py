@@ -17,7 +17,7 @@ from ..io.files import read_json
 # The fallbacks used when a definitions file lacks an optional ``model`` key: the values the
 # model used before the key existed, so an older user file poses as it did. The shipped
 # expressions.json sets most of them explicitly (several to other values: slide_thickness
-# 0.08, under_chin_depth 0.8, cheek_spread 0.25, jaw_glide [0.003, 0.002], eyelids.lateral_reach
+# 0.08, under_chin_depth 0.8, cheek_spread 0.25, jaw_glide [0.0035, 0.004], eyelids.lateral_reach
 # 1.6, eyelids.corner_release 1.0, eyelids.smoothing 0.02).
 MODEL_DEFAULTS = {
     "skull_smoothing_passes": 10,       # neighbour-sum passes smoothing the skull directions
