@@ -96,12 +96,17 @@ class Frame:
         Head size in input units: canonical coordinates are input units / size.
     symmetry_error : float
         Mean distance, in head sizes, between the sample and its mirror image.
+    cut : ((3,) float, (3,) float) or None
+        A planar neck cut or bust base found by :func:`detect_frame`: its centre (canonical) and unit
+        normal pointing out of the mesh (canonical); None when there is none (or not detected). Not
+        written by :meth:`to_dict`: it is the detection's, kept so ``place`` need not look again.
     """
 
     rotation: np.ndarray
     origin: np.ndarray
     size: float
     symmetry_error: float = float("nan")
+    cut: tuple = None
 
     def to_canonical(self, P):
         """(k, 3) input-frame points -> (k, 3) canonical points (head sizes)."""
@@ -190,20 +195,23 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         candidates, cues = [(up_v, front_v)], None
     else:
         sym_err, normal, offset, cues = _symmetry_plane(V, F, P, tree, rms, up_v, front_v)
-        if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
-            candidates = _shape_candidates(P, normal, cues)
-        else:
-            candidates = _candidates(normal, up_v, front_v)
+    # free: nothing forced; turned: nor authored on the input axes, so the candidates come from the shape
+    free = up_v is None and front_v is None
+    turned = free and np.abs(normal).max() < AUTHORED
+    if cues is None:
+        cues = _cut_cues(V, F)  # only the frame's cut needs them when up is forced
+    planar = is_planar_cut(cues)
+    if up_v is None or front_v is None:
+        candidates = _shape_candidates(P, normal, cues) if turned else _candidates(normal, up_v, front_v)
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
     face_only = False
     every, full_ref = candidates, ref
     if len(candidates) > 1 and up_v is None:
-        cues = _cut_cues(V, F) if cues is None else cues
         candidates, ref, face_only = _cut_candidates(P, normal, candidates, cues, ref)
     if len(candidates) > 1:
         scores = _overlay_scores(P, candidates, ref)
-        if face_only and front_v is None and is_planar_cut(cues):
+        if face_only and front_v is None and planar:
             # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
             # capture must overlay the reference's face far better than its whole head stood on
             # the cut (the shared heads' front halves and quarters: 0.25-0.42 of it; the zoo's
@@ -213,11 +221,10 @@ def detect_frame(V, F, up=None, front=None, reference=None):
             if neck and min(scores) > FACE_VS_NECK * min(neck_scores):
                 candidates, scores, ref, face_only = neck, neck_scores, full_ref, False
         up_d, front_d = candidates[int(np.argmin(scores))]
-        if up_v is None and front_v is None and np.abs(normal).max() < AUTHORED:
+        if turned:
             # candidates 30 degrees apart round a turned head: settle the angle between them
             up_d, front_d = _refine_angle(P, normal, up_d, front_d, ref)
-        if (up_v is None and front_v is None and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE)
-                and is_planar_cut(cues)):
+        if free and planar and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE):
             # no human face matches (an animal, a cartoon): the reference head cannot tell its
             # front from its back, the neck cut can
             up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
@@ -233,7 +240,8 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     used = used_vertices(F, len(V))
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
-    return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err))
+    cut = ((cues["loop_centre"] - origin) @ R.T / size, cues["loop_normal"] @ R.T) if planar else None
+    return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err), cut=cut)
 
 
 def _overlay_scores(P, candidates, ref):

@@ -146,6 +146,19 @@ def turned(ref, R):
     return None if ref is None else {k: R @ v for k, v in ref.items()}
 
 
+def rig_checks(head, var, rig, ref, checks, tag):
+    """Checks 3 (neck base), 4 (pivot) and 5 (weights) of either rig; ``tag`` "P" or "T" names the cells."""
+    out = {}
+    if 3 in checks:
+        out[f"3 neck {tag}"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
+                                       zc.chin_height(var.truth, var.R @ head.up))
+    if 4 in checks:
+        out[f"4 pivot {tag}"] = guarded(zc.check_pivot, rig, var.truth, ref, var.core, head.human)
+    if 5 in checks:
+        out["5 weights"] = guarded(zc.check_weights, rig)
+    return out
+
+
 def place_checks(head, var, rig, checks):
     out = {}
     ref = turned(head.ref, var.R)
@@ -161,13 +174,7 @@ def place_checks(head, var, rig, checks):
             elif res.status == "na":   # no landmarks: the drift is the whole check
                 res = zc.Result("ok")
         out["1 frame"] = res
-    if 3 in checks:
-        out["3 neck P"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
-                                   zc.chin_height(var.truth, var.R @ head.up))
-    if 4 in checks:
-        out["4 pivot P"] = guarded(zc.check_pivot, rig, var.truth, ref, var.core, head.human)
-    if 5 in checks:
-        out["5 weights"] = guarded(zc.check_weights, rig)
+    out.update(rig_checks(head, var, rig, ref, checks, "P"))
     return out
 
 
@@ -176,13 +183,7 @@ def transfer_checks(head, var, rig, details, checks):
     ref = turned(head.ref, var.R)
     if 2 in checks:
         out["2 jaw"] = guarded(zc.check_jaw, rig, var.truth, var.lm)
-    if 3 in checks:
-        out["3 neck T"] = guarded(zc.check_neck_base, rig, var.R @ head.up, var.core,
-                                   zc.chin_height(var.truth, var.R @ head.up))
-    if 4 in checks:
-        out["4 pivot T"] = guarded(zc.check_pivot, rig, var.truth, ref, var.core, head.human)
-    if 5 in checks:
-        out["5 weights"] = guarded(zc.check_weights, rig)
+    out.update(rig_checks(head, var, rig, ref, checks, "T"))
     if 6 in checks and var.name == "as-is":
         head.corr0 = (details["correspondence"], details["reliable"], var.V, var.F)
     elif 6 in checks and head.corr0 is not None and var.name != "jitter":

@@ -17,7 +17,6 @@ import numpy as np
 from .facial_bones import bone_count, check_seed, facial_bones
 from ..io.mesh import resolve_mesh, stray_parts
 from ..geometry.proxy import mesh_proxy
-from ..cut_cues import cut_cues, is_planar_cut
 from ..orient import detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -91,10 +90,9 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
     # blend band, the neck base pure neck, no neck weight on the skull
     joints = seg.joints
-    cues = cut_cues(C, F)
-    cut = (cues["loop_centre"], cues["loop_normal"]) if is_planar_cut(cues) else None
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
-                     chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"], cut=cut)
+                     chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"],
+                     cut=frame.cut)
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}
