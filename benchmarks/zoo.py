@@ -146,7 +146,7 @@ def turned(ref, R):
     return None if ref is None else {k: R @ v for k, v in ref.items()}
 
 
-def rig_checks(head, var, rig, ref, checks, tag):
+def body_checks(head, var, rig, ref, checks, tag):
     """Checks 3 (neck base), 4 (pivot) and 5 (weights) of either rig; ``tag`` "P" or "T" names the cells."""
     out = {}
     if 3 in checks:
@@ -174,7 +174,7 @@ def place_checks(head, var, rig, checks):
             elif res.status == "na":   # no landmarks: the drift is the whole check
                 res = zc.Result("ok")
         out["1 frame"] = res
-    out.update(rig_checks(head, var, rig, ref, checks, "P"))
+    out.update(body_checks(head, var, rig, ref, checks, "P"))
     return out
 
 
@@ -183,7 +183,7 @@ def transfer_checks(head, var, rig, details, checks):
     ref = turned(head.ref, var.R)
     if 2 in checks:
         out["2 jaw"] = guarded(zc.check_jaw, rig, var.truth, var.lm)
-    out.update(rig_checks(head, var, rig, ref, checks, "T"))
+    out.update(body_checks(head, var, rig, ref, checks, "T"))
     if 6 in checks and var.name == "as-is":
         head.corr0 = (details["correspondence"], details["reliable"], var.V, var.F)
     elif 6 in checks and head.corr0 is not None and var.name != "jitter":
