@@ -66,14 +66,17 @@ def batch_dir(tmp_path_factory):
 
 
 class Serving:
-    """A ViewServer answering in a thread; ``get`` sends a raw request path (no client-side normalising)."""
+    """A ViewServer answering in a thread; ``get`` sends a raw request path (no client-side normalising),
+    after the server's token (``/TOKEN/...``) unless ``token=False``."""
 
     def __init__(self, path):
         self.server = make_server(str(path))
         self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
         self.thread.start()
 
-    def request(self, method, target, host=None, body=None):
+    def request(self, method, target, host=None, body=None, token=True):
+        if token:
+            target = f"/{self.server.token}{target}"
         c = http.client.HTTPConnection("127.0.0.1", self.server.port, timeout=30)
         c.putrequest(method, target, skip_host=True, skip_accept_encoding=True)
         c.putheader("Host", host or f"127.0.0.1:{self.server.port}")
@@ -158,7 +161,7 @@ def test_server_refuses_traversal_writes_and_foreign_hosts(batch_dir, batch_serv
 def test_listens_on_127_0_0_1_only(batch_server):
     port = batch_server.server.port
     assert batch_server.server.server_address[0] == "127.0.0.1"
-    assert batch_server.server.url == f"http://127.0.0.1:{port}/"
+    assert batch_server.server.url == f"http://127.0.0.1:{port}/{batch_server.server.token}/"
     others = ["127.0.0.2"]  # all of 127/8 is loopback on Linux: bound to 127.0.0.1 only, .2 must be refused
     try:  # the machine's own outward address, when it has one
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as u:
@@ -319,10 +322,10 @@ def test_cli_prints_the_url_first_and_stops_cleanly_on_ctrl_c(rig_dir):
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         first = p.stdout.readline()  # flushed at once: a script can read it while the server runs
-        m = re.fullmatch(r"http://127\.0\.0\.1:(\d+)/\n", first)
+        m = re.fullmatch(r"http://127\.0\.0\.1:(\d+)/([A-Za-z0-9_-]{22})/\n", first)  # the token URL
         assert m, first
         c = http.client.HTTPConnection("127.0.0.1", int(m.group(1)), timeout=30)
-        c.request("GET", "/api/site")
+        c.request("GET", f"/{m.group(2)}/api/site")
         site = json.loads(c.getresponse().read())
         assert site == {"mode": "rig", "rig": "robot.glb", "title": "robot.glb"}
         p.send_signal(signal.SIGINT)  # with a browser's keep-alive connection still open (c)
@@ -340,9 +343,12 @@ def test_page_assets_are_bundled_and_installed(tmp_path):
     file under static/ matches pyproject's package-data (what ``pip install .`` copies)."""
     index = (Path(STATIC) / "index.html").read_text()
     imports = json.loads(re.search(r'<script type="importmap">(.*?)</script>', index, re.S).group(1))["imports"]
-    assert (Path(STATIC) / "vendor" / "three.module.min.js").is_file() and imports["three"] == "/static/vendor/three.module.min.js"
+    # relative URLs: the page lives under /TOKEN/, and so must every request it makes
+    assert (Path(STATIC) / "vendor" / "three.module.min.js").is_file() and imports["three"] == "./static/vendor/three.module.min.js"
     for name in ("controls/OrbitControls.js", "loaders/GLTFLoader.js", "utils/BufferGeometryUtils.js"):
-        assert (Path(STATIC) / imports["three/addons/"][len("/static/"):] / name).is_file()
+        assert (Path(STATIC) / imports["three/addons/"][len("./static/"):] / name).is_file()
+    for page in ("index.html", "app.js"):
+        assert not re.search(r"""(?:src|href)=["']/|['"`]/(?:api|files|static)/""", (Path(STATIC) / page).read_text()), page
     assert "MIT License" in (Path(STATIC) / "vendor" / "LICENSE").read_text()
     for page in ("index.html", "app.js", "style.css"):
         assert not re.search(r"https?://", (Path(STATIC) / page).read_text()), page  # offline: no CDN
@@ -380,7 +386,8 @@ def _open(browser, url):
     page.on("requestfailed", lambda r: errors.append(f"request failed: {r.url} ({r.failure})"))
 
     # the page must need nothing but this server: no CDN, no web font, no outside request (watched, not
-    # intercepted: playwright's interception reports a streamed fetch that completed as aborted)
+    # intercepted: playwright's interception reports a streamed fetch that completed as aborted); and every
+    # request it makes (the glb, the API, the thumbnails) carries the token: it starts with the token URL
     page.on("request", lambda r: None if r.url.startswith((url, "data:")) else errors.append(f"outside request: {r.url}"))
     page.goto(url)
     page.wait_for_function("window.autobonesViewer && (window.autobonesViewer.ready || window.autobonesViewer.error)",

@@ -1,17 +1,20 @@
-"""The viewer's local web server: the page, the files of the folder given, and a small JSON API.
+"""The viewer's local web server: the page, the rigs of the folder given, and a small JSON API.
 
-Beyond the seeds (issue #17). Python's ``http.server`` (``ThreadingHTTPServer``) bound to 127.0.0.1 only,
-read-only (GET and HEAD; every other method is refused with 405). Paths from the URL are resolved
-against the folder and refused when they leave it: ``..`` segments, absolute or drive paths, hidden
-names, and symbolic links that point outside (403); missing files are 404. Requests whose ``Host``
-header is not this server's own address are refused too (a web page elsewhere cannot read the folder
-through DNS rebinding).
+Beyond the seeds (issue #17). Python's ``http.server`` bound to 127.0.0.1 only, read-only (GET and HEAD;
+every other method is refused with 405), with a bounded pool of worker threads and a deadline on every
+request's headers (:mod:`autobones.view.connections`). Every URL starts with the server's random token
+(:mod:`autobones.view.guard`, issue #33): ``http://127.0.0.1:PORT/TOKEN/``; without it, 403. Paths from the
+URL are resolved against the folder and refused when they leave it: ``..`` segments, absolute or drive
+paths, hidden names, and symbolic links that point outside (403); inside it, only the rigs the page shows
+and their sidecars are served (anything else is 404, as a missing file). Requests whose ``Host`` header
+is not this server's own address are refused too (a web page elsewhere cannot read the folder through
+DNS rebinding).
 
-Routes
+Routes (each under ``/TOKEN``; ``/TOKEN`` alone redirects to ``/TOKEN/``)
 ------
 ``/``                       the page (static/index.html); ``?rig=REL`` opens one rig of a batch folder
 ``/static/...``             the page's scripts and the bundled three.js (package data)
-``/files/REL``              a file of the folder served (the rigs' glb)
+``/files/REL``              a rig's glb (or its ``.rig.json``, ``.weights.npz``): :func:`~.guard.served_files`
 ``/api/site``               ``{"mode": "rig"|"batch", "rig": REL|null, "title"}``
 ``/api/rig?path=REL``       :func:`autobones.view.site.rig_facts`
 ``/api/batch``              :func:`autobones.view.site.batch_listing`
@@ -26,11 +29,12 @@ import logging
 import mimetypes
 import os
 from http import HTTPStatus
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from urllib.parse import parse_qs, unquote, urlsplit
+from urllib.parse import parse_qs, urlsplit
 
 from ..errors import AutobonesError
 from ..io.jsonable import strict_dumps
+from .connections import BoundedHTTPServer, TimedHandler
+from .guard import Refused, new_token, resolve_under, served_files, split_token
 from .site import batch_listing, batch_record, bone_weights, glb_generator, open_site, rig_facts
 from .thumbnails import ThumbnailCache
 
@@ -43,52 +47,19 @@ TYPES = {".js": "text/javascript; charset=utf-8", ".html": "text/html; charset=u
          ".md": "text/plain; charset=utf-8", ".npz": "application/octet-stream"}
 
 
-class Refused(Exception):
-    """A request path that leaves the folder served (HTTP 403)."""
+class ViewServer(BoundedHTTPServer):
+    """A bounded HTTP server on 127.0.0.1 serving one :class:`~autobones.view.site.Site`.
 
-
-def resolve_under(root, rel):
-    """Real path of the URL path ``rel`` inside folder ``root``, or :class:`Refused`.
-
-    Parameters
-    ----------
-    root : str
-        Real (symlink-free, absolute) path of the folder served.
-    rel : str
-        '/'-separated path, percent-decoded already or not (decoded once more here is harmless:
-        a literal '%2e%2e' is refused either way).
-
-    Returns
-    -------
-    str
-        The real path; it may not exist (the caller answers 404).
-
-    Refused when ``rel`` has a ``..`` segment, is absolute or a drive path, has a backslash or NUL,
-    a hidden (dot) name, or resolves (through symbolic links) outside ``root``.
-    """
-    rel = unquote(rel)
-    if "\x00" in rel or "\\" in rel or rel.startswith("/") or (len(rel) > 1 and rel[1] == ":"):
-        raise Refused(rel)
-    parts = [p for p in rel.split("/") if p not in ("", ".")]
-    if any(p == ".." or p.startswith(".") for p in parts):
-        raise Refused(rel)
-    path = os.path.realpath(os.path.join(root, *parts))
-    if path != root and not path.startswith(root.rstrip(os.sep) + os.sep):
-        raise Refused(rel)  # a symbolic link that points out of the folder
-    return path
-
-
-class ViewServer(ThreadingHTTPServer):
-    """``ThreadingHTTPServer`` on 127.0.0.1 serving one :class:`~autobones.view.site.Site`.
-
-    Attributes: ``site``, ``url`` (``http://127.0.0.1:PORT/``), ``thumbnails`` (the cache).
+    Attributes: ``site``, ``token``, ``url`` (``http://127.0.0.1:PORT/TOKEN/``: the only way in),
+    ``thumbnails`` (the cache), ``served`` (:func:`~autobones.view.guard.served_files`).
     """
 
-    daemon_threads = True  # Ctrl-C must not wait for a browser's open keep-alive connections
     allow_reuse_address = False  # two viewers must not share a port
 
     def __init__(self, site, port=0):
         self.site = site
+        self.token = new_token()
+        self.served = served_files(site)
         self.thumbnails = ThumbnailCache()
         try:
             super().__init__((HOST, int(port)), ViewHandler)
@@ -98,7 +69,7 @@ class ViewServer(ThreadingHTTPServer):
                                      "(a free one is picked)") from None
             raise AutobonesError(f"--port {port}: cannot listen on {HOST} ({exc.strerror or exc})") from None
         self.port = self.server_address[1]
-        self.url = f"http://{HOST}:{self.port}/"
+        self.url = f"http://{HOST}:{self.port}/{self.token}/"
 
 
 def make_server(path, port=0):
@@ -123,7 +94,7 @@ def make_server(path, port=0):
     return ViewServer(open_site(path), port)
 
 
-class ViewHandler(BaseHTTPRequestHandler):
+class ViewHandler(TimedHandler):
     """GET and HEAD only; see the module docstring for the routes."""
 
     server_version = "autobones-view"
@@ -147,33 +118,42 @@ class ViewHandler(BaseHTTPRequestHandler):
 
     def _answer(self, head):
         self._head_only = head
-        host = (self.headers.get("Host") or "").lower()
-        port = self.server.port
-        if host not in (f"127.0.0.1:{port}", f"localhost:{port}"):
-            return self._send_error(HTTPStatus.FORBIDDEN, "unknown Host")
-        url = urlsplit(self.path)
-        query = {k: v[-1] for k, v in parse_qs(url.query).items()}
-        route = url.path
         try:
-            if route in ("/", "/index.html"):
-                return self._send_file(os.path.join(STATIC, "index.html"), cache=False)
-            if route.startswith("/static/"):
-                return self._send_file(resolve_under(STATIC, route[len("/static/"):]))
-            if route.startswith("/files/"):
-                return self._send_file(resolve_under(self.server.site.root, route[len("/files/"):]), cache=False)
-            if route.startswith("/api/"):
-                return self._api(route[len("/api/"):], query)
-            return self._send_error(HTTPStatus.NOT_FOUND, "no such page")
+            return self._route()
         except Refused:
             return self._send_error(HTTPStatus.FORBIDDEN, "outside the folder served")
         except AutobonesError as exc:
             return self._send_error(HTTPStatus.NOT_FOUND, str(exc))
-        except (BrokenPipeError, ConnectionResetError):
+        except (BrokenPipeError, ConnectionResetError, TimeoutError):  # the client left, or took too long
+            self.close_connection = True
             return None
         except Exception as exc:  # a bug: answer 500 and keep serving; one line in the log, the traceback at -vv
             log.warning("%s failed: %s: %s", self.path, type(exc).__name__, exc)
             log.debug("traceback", exc_info=True)
             return self._send_error(HTTPStatus.INTERNAL_SERVER_ERROR, f"{type(exc).__name__}: {exc}")
+
+    def _route(self):
+        host = (self.headers.get("Host") or "").lower()
+        port = self.server.port
+        if host not in (f"127.0.0.1:{port}", f"localhost:{port}"):
+            return self._send_error(HTTPStatus.FORBIDDEN, "unknown Host")
+        url = urlsplit(self.path)
+        ok, route = split_token(url.path, self.server.token)
+        if not ok:  # the same answer for any path: nothing about the folder is told without the token
+            return self._send_error(HTTPStatus.FORBIDDEN, "no token: open the URL that autobones view printed")
+        if route is None:  # /TOKEN: the page's relative URLs need the trailing slash
+            where = f"/{self.server.token}/" + (f"?{url.query}" if url.query else "")
+            return self._send_bytes(b"", "text/plain", False, HTTPStatus.MOVED_PERMANENTLY, {"Location": where})
+        query = {k: v[-1] for k, v in parse_qs(url.query).items()}
+        if route in ("/", "/index.html"):
+            return self._send_file(os.path.join(STATIC, "index.html"), cache=False)
+        if route.startswith("/static/"):
+            return self._send_file(resolve_under(STATIC, route[len("/static/"):]))
+        if route.startswith("/files/"):
+            return self._send_rig_file(route[len("/files/"):])
+        if route.startswith("/api/"):
+            return self._api(route[len("/api/"):], query)
+        return self._send_error(HTTPStatus.NOT_FOUND, "no such page")
 
     def _api(self, name, query):
         site = self.server.site
@@ -201,11 +181,20 @@ class ViewHandler(BaseHTTPRequestHandler):
         return os.path.relpath(path, self.server.site.root).replace(os.sep, "/")
 
     def _rig_path(self, rel):
-        """Real path of the rig glb ``rel`` under the folder, None when it is not one (Refused when outside)."""
+        """Real path of the rig glb ``rel`` when the page shows it, None otherwise (Refused when outside)."""
         path = resolve_under(self.server.site.root, rel)
-        if not path.lower().endswith(".glb") or not os.path.isfile(path) or glb_generator(path) != "autobones":
+        if self.server.served.get(path) != path or not os.path.isfile(path) or glb_generator(path) != "autobones":
             return None
         return path
+
+    def _send_rig_file(self, rel):
+        """A rig the page shows or one of its sidecars; any other file of the folder is 404 (not 403: a
+        request does not learn whether it exists)."""
+        path = resolve_under(self.server.site.root, rel)
+        glb = self.server.served.get(path)
+        if glb is None or glb_generator(glb) != "autobones":
+            return self._send_error(HTTPStatus.NOT_FOUND, "no such file among the rigs shown")
+        return self._send_file(path, cache=False)
 
     def _send_file(self, path, cache=True):
         if not os.path.isfile(path):
@@ -228,6 +217,7 @@ class ViewHandler(BaseHTTPRequestHandler):
         self.send_header("Content-Length", str(len(data)))
         self.send_header("Cache-Control", "max-age=3600" if cache else "no-store")
         self.send_header("X-Content-Type-Options", "nosniff")
+        self.send_header("Referrer-Policy", "no-referrer")  # the token is in every URL: never sent on
         for k, v in (extra or {}).items():
             self.send_header(k, v)
         self.end_headers()

@@ -1,5 +1,6 @@
 // autobones view: one rig (orbit, pose, weights, expressions) or a batch folder (thumbnails + report).
-// The server (autobones/view/server.py) serves this page, the rig files under /files/ and JSON under /api/.
+// The server (autobones/view/server.py) serves this page, the rig files under files/ and JSON under api/,
+// all under /TOKEN/: every URL here is relative to the page, so each request carries the token.
 // window.autobonesViewer is a small hook for scripts and tests: state, sliders, skinned positions.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -18,7 +19,7 @@ const el = (tag, attrs = {}, ...kids) => {
   for (const kid of kids) if (kid !== null && kid !== undefined) e.append(kid);
   return e;
 };
-const fileURL = (rel) => '/files/' + rel.split('/').map(encodeURIComponent).join('/');
+const fileURL = (rel) => 'files/' + rel.split('/').map(encodeURIComponent).join('/');
 const fmt = (x, d = 3) => (x === null || x === undefined || Number.isNaN(x)) ? '–' : (+x).toPrecision(d);
 
 async function getJSON(url) {
@@ -39,7 +40,7 @@ async function loadGLB(url) {
 function setStatus(text) { $('#status').textContent = text; }
 
 async function main() {
-  const site = await getJSON('/api/site');
+  const site = await getJSON('api/site');
   const wanted = new URLSearchParams(location.search).get('rig');
   hook.site = site;
   if (wanted) await showRig(wanted, site.mode === 'batch');
@@ -75,10 +76,10 @@ function hsv(h, s, v, out, o) {  // Python's colorsys.hsv_to_rgb, as the thumbna
 async function showRig(rel, fromBatch) {
   hook.mode = 'rig';
   $('#crumb').replaceChildren(
-    fromBatch ? el('a', { href: '/', text: '← batch' }) : '', fromBatch ? ' / ' : '', rel);
+    fromBatch ? el('a', { href: './', text: '← batch' }) : '', fromBatch ? ' / ' : '', rel);
   setStatus('loading the rig…');
   const [facts, gltf] = await Promise.all([
-    getJSON('/api/rig?path=' + encodeURIComponent(rel)),
+    getJSON('api/rig?path=' + encodeURIComponent(rel)),
     loadGLB(fileURL(rel)),
   ]);
   hook.facts = facts;
@@ -249,7 +250,7 @@ async function showRig(rel, fromBatch) {
       if (source === 'npz') {
         const key = name;
         if (!weightCache.has(key)) {
-          const r = await getJSON(`/api/weights?path=${encodeURIComponent(rel)}&bone=${encodeURIComponent(name)}`);
+          const r = await getJSON(`api/weights?path=${encodeURIComponent(rel)}&bone=${encodeURIComponent(name)}`);
           weightCache.set(key, Float32Array.from(r.weights));
         }
         w = weightCache.get(key);
@@ -434,7 +435,7 @@ async function showBatch(site) {
   hook.mode = 'batch';
   $('#crumb').textContent = site.title;
   setStatus('reading the report…');
-  const data = await getJSON('/api/batch');
+  const data = await getJSON('api/batch');
   const files = data.files;
   const counts = { ok: 0, failed: 0, skipped: 0 };
   for (const f of files) counts[f.status] = (counts[f.status] || 0) + 1;
@@ -466,7 +467,7 @@ async function showBatch(site) {
   const cards = files.map((f) => {
     const name = f.output || f.input || '?';
     const pic = f.viewable
-      ? el('img', { class: 'thumb', loading: 'lazy', alt: name, src: '/api/thumb?path=' + encodeURIComponent(f.output) })
+      ? el('img', { class: 'thumb', loading: 'lazy', alt: name, src: 'api/thumb?path=' + encodeURIComponent(f.output) })
       : el('div', { class: 'nothumb', text: f.status === 'failed' ? 'failed' : 'no rig' });
     const meta = [f.input && f.input !== name ? `from ${f.input}` : null,
                   f.vertices ? `${f.vertices} vertices` : null, f.bones ? `${f.bones} bones` : null,
@@ -481,7 +482,7 @@ async function showBatch(site) {
         f.status === 'failed' && f.error ? el('div', { class: 'err', text: f.error }) : null,
         f.status === 'skipped' && f.reason ? el('div', { class: 'meta', text: f.reason }) : null,
         ...f.warnings.map((w) => el('div', { class: 'warn', text: w.text }))));
-    if (f.viewable) card.addEventListener('click', () => { location.href = '/?rig=' + encodeURIComponent(f.output); });
+    if (f.viewable) card.addEventListener('click', () => { location.href = './?rig=' + encodeURIComponent(f.output); });
     return { f, card, name };
   });
 
