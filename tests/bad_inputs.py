@@ -17,6 +17,9 @@ FIFO, a folder, a file over its size or row limit, JSON nested 100k deep, a newl
 bad options; every one must end as ``expect="refused"``: one line on stderr containing ``needle``,
 exit code 2, nothing written, the inputs untouched, and no wait on a FIFO.
 ``write_command_case(folder, name, rig)`` makes the files and returns the argument list.
+
+``view_cases()`` (issue #33 item 9) are requests to ``autobones view`` on ``write_view_folder``: no token or a
+wrong one is 403, a file of the folder that is not a rig shown (or its sidecar) is 404 even with the token.
 """
 from __future__ import annotations
 
@@ -329,6 +332,59 @@ def write_command_case(folder, name, rig):
         else:
             file.write_bytes(what[2])
     return [a.format(rig=folder / "r.glb", head=folder / "head.obj", file=file, out=folder / "out") for a in args]
+
+
+def view_cases():
+    """{name: (target, status, Case)} (issue #33 item 9): requests to ``autobones view`` on the folder
+    ``write_view_folder`` makes, ``{token}`` replaced by the server's token and ``{wrong}`` by another of the
+    same length. ``expect="refused"``: the status given, nothing of the file in the answer;
+    ``expect="ok"``: 200, the file's own bytes. The connection cases (100 idle sockets, a slowloris
+    client) are tests of their own in tests/test_view_limits.py."""
+    out = {}
+
+    def add(name, target, status, why):
+        out[name] = (target, status, Case("refused" if status != 200 else "ok", str(status), why))
+
+    add("view_no_token_page", "/", 403, "the page without the token (was: 200, any local user could open it)")
+    add("view_no_token_api", "/api/batch", 403, "the batch listing without the token (was: 200)")
+    add("view_no_token_file", "/files/robot.glb", 403, "a rig without the token (was: 200)")
+    add("view_wrong_token", "/{wrong}/files/robot.glb", 403, "a guessed token of the right length")
+    add("view_token_not_first", "/files/{token}/robot.glb", 403, "the token elsewhere than the first segment")
+    add("view_other_file", "/{token}/files/notes.txt", 404,
+        "a file of the folder that is not a rig, with the token (was: 200: every non-hidden file was served)")
+    add("view_report_file", "/{token}/files/batch_report.json", 404,
+        "the batch report as a file (the page reads it through /api/batch; it names the input folder)")
+    add("view_input_copy", "/{token}/files/sub/head.obj", 404, "a mesh left in a sub-folder")
+    add("view_unlisted_rig", "/{token}/files/extra.glb", 404, "an autobones rig the report does not list")
+    add("view_unlisted_rig_api", "/{token}/api/rig?path=extra.glb", 404, "the same rig's facts through the API")
+    add("view_unlisted_thumb", "/{token}/api/thumb?path=extra.glb", 404, "the same rig's thumbnail")
+    add("view_traversal", "/{token}/files/../secret.txt", 403, "a file outside the folder, with the token")
+    add("view_rig", "/{token}/files/robot.glb", 200, "a rig the page shows")
+    add("view_sidecar", "/{token}/files/robot.rig.json", 200, "its sidecar")
+    add("view_weights", "/{token}/files/robot.weights.npz", 200, "its full weight matrix")
+    return out
+
+
+def write_view_folder(folder, rig):
+    """``folder/rigs``: what ``view_cases`` are asked of. A batch report listing ``robot.glb`` (the rig ``rig``
+    copied in, its sidecars too), ``extra.glb`` (the same rig, not listed), ``notes.txt``, ``sub/head.obj``,
+    and ``folder/secret.txt`` beside it. Returns the rigs folder."""
+    import shutil
+
+    rigs = Path(folder) / "rigs"
+    (rigs / "sub").mkdir(parents=True)
+    rig = Path(rig)
+    for stem in ("robot", "extra"):
+        for src in (rig, rig.with_name(rig.stem + ".rig.json"), rig.with_name(rig.stem + ".weights.npz")):
+            shutil.copy(src, rigs / src.name.replace(rig.stem, stem, 1))
+    report = {"format": "autobones-batch-report/1", "input": "/in", "output": str(rigs),
+              "counts": {"ok": 1, "failed": 0, "skipped": 0},
+              "files": [{"input": "robot.obj", "output": "robot.glb", "status": "ok"}]}
+    (rigs / "batch_report.json").write_text(json.dumps(report))
+    (rigs / "notes.txt").write_text("private notes\n")
+    (rigs / "sub" / "head.obj").write_bytes(data(ROBOT).read_bytes())
+    (Path(folder) / "secret.txt").write_text("secret\n")
+    return rigs
 
 
 def write_mesh_corpus(folder):

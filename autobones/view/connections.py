@@ -92,6 +92,7 @@ class BoundedHTTPServer(HTTPServer):
     header_seconds = 5.0    # a request's line and headers, and a keep-alive connection's idle time
     grace_seconds = 0.25    # reading time left to a connection that waited in the queue past its deadline
     write_seconds = 60.0    # for the client to take a response
+    request_queue_size = 128  # the listen backlog (socketserver's 5 would stall connects before the 503)
 
     def __init__(self, server_address, handler_class):
         # the pool first: a failed bind calls server_close from inside HTTPServer.__init__
