@@ -125,13 +125,13 @@ def test_100_idle_sockets_use_at_most_the_pool_and_are_closed_in_time(view_folde
 
 def test_slowloris_and_idle_keep_alive_are_closed_by_the_deadline(view_folder, server):
     srv = server.server
-    slow = socket.create_connection(("127.0.0.1", srv.port), timeout=5)
     keep = http.client.HTTPConnection("127.0.0.1", srv.port, timeout=30)
     keep.request("GET", f"/{srv.token}/api/site")
     r = keep.getresponse()
     assert r.status == 200 and r.getheader("Connection") != "close"
     r.read()  # the connection stays open for the next request, until it has been idle for header_seconds
-    t0 = time.monotonic()
+    slow = socket.create_connection(("127.0.0.1", srv.port), timeout=5)
+    t0 = time.monotonic()  # the slow connection's deadline counts from its accept, just before this
     slow.sendall(f"GET /{srv.token}/api/site HTTP/1.1\r\n".encode())
     header = f"Host: 127.0.0.1:{srv.port}\r\nX-Slow: {'a' * 40}\r\n\r\n".encode()
     closed_at = None
