@@ -34,7 +34,8 @@ BATCH_HEADS = ["misc/robot_head_neutral.obj", "misc/robot_head_Surprised.obj", "
 
 
 def serve(path):
-    """A started :class:`autobones.view.ViewServer` for ``path`` (answering in a daemon thread)."""
+    """A started :class:`autobones.view.ViewServer` for ``path`` (answering in a daemon thread). Open its
+    ``url``: the only way in is the token URL it carries (``http://127.0.0.1:PORT/TOKEN/``)."""
     from autobones.view import make_server
 
     server = make_server(str(path))
