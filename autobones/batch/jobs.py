@@ -208,7 +208,7 @@ class _one_blas_thread:
 
 def _save_atomically(rig, output_path, partial, expressions=False, tissue=False, input_root=None):
     """Save into ``partial``, then rename glb, npz and last the sidecar (the commit mark) into place."""
-    from .workers import exit_if_orphaned
+    from .workers import dask_task_cancelled, exit_if_orphaned
 
     folder = os.path.dirname(os.path.abspath(output_path))
     if input_root is not None:  # the plan checked; a link made since must not lead us into the input
@@ -225,6 +225,9 @@ def _save_atomically(rig, output_path, partial, expressions=False, tissue=False,
     # all three or none (a failed rename puts back what was there), the sidecar last: it marks the file done;
     # never by an orphan: a worker whose batch was killed leaves the .partial folder for the next run
     exit_if_orphaned()
+    if dask_task_cancelled():
+        raise AutobonesError(f"{output_path}: the batch that asked for this file is gone (the Dask task was "
+                             "cancelled); nothing renamed")
     replace_all(((staged[0], glb), (staged[2], npz), (staged[1], js)), "the rig")
     try:
         os.rmdir(partial)

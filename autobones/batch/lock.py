@@ -76,10 +76,17 @@ def _open(path):
                              "remove what stands at that name") from None
 
 
-def _holder(fd):
-    """The pid written in the lock file, or "unknown" (it writes it just after locking)."""
-    try:
-        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
-    except OSError:
-        text = ""
-    return text if text.isdigit() else "unknown"
+def _holder(fd, tries=20):
+    """The pid written in the lock file, or "unknown". The holder writes it just after locking, so
+    an empty file is read again a few times (0.2 s at most) before giving up."""
+    import time
+
+    for _ in range(tries):
+        try:
+            text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        except OSError:
+            return "unknown"
+        if text.isdigit():
+            return text
+        time.sleep(0.01)
+    return "unknown"
