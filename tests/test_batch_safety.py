@@ -163,6 +163,22 @@ def test_a_link_to_a_folder_outside_the_input_is_followed(tmp_path, heads_and_cl
     assert outputs(elsewhere) == {k[len("sub/"):]: v for k, v in outputs(clean).items()}
 
 
+def test_a_job_resolves_its_outputs_again_before_writing(tmp_path):
+    """A link made after the plan (here: before rig_one is called directly) is refused by the job itself."""
+    from autobones.batch import make_options, rig_one
+
+    heads = make_heads(tmp_path / "in", HEADS[:1])
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "sub").symlink_to(heads / "sub", target_is_directory=True)
+    name = Path(HEADS[0]).name
+    before = snapshot(heads)
+    rec = rig_one(str(heads / "sub" / name), str(out / "sub" / Path(name).with_suffix(".glb")),
+                  make_options(density="sparse"), str(heads))
+    assert rec["status"] == "failed" and "inside the input folder" in rec["error"], rec
+    assert snapshot(heads) == before
+
+
 def test_an_atomic_write_replaces_a_link_at_its_name_never_its_target(tmp_path):
     from autobones.io.atomic import replace_all, temp_beside, write_bytes_atomic
 
@@ -215,6 +231,99 @@ def test_kill_9_of_the_batch_leaves_no_process_and_a_rerun_is_byte_identical(tmp
     got, ref = outputs(out), outputs(clean)
     assert sorted(got) == sorted(ref)  # same files: no temporaries, no lock file left
     assert [k for k in ref if got[k] != ref[k]] == []
+
+
+PARENT = """
+import os, sys, time
+from concurrent.futures import ProcessPoolExecutor
+import multiprocessing
+
+def init(parent):
+    from autobones.batch.workers import init_worker
+    platform, sys.platform = sys.platform, "darwin"  # as on macOS: no PR_SET_PDEATHSIG, the poll alone
+    try:
+        init_worker(parent)
+    finally:
+        sys.platform = platform
+
+def work(path):
+    with open(path + ".tmp", "w") as fh:
+        fh.write(str(os.getpid()))
+    os.replace(path + ".tmp", path)
+    time.sleep(120)
+
+if __name__ == "__main__":
+    pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"), initializer=init,
+                               initargs=(os.getpid(),))
+    pool.submit(work, sys.argv[1])
+    time.sleep(300)
+"""
+
+
+def test_without_pdeathsig_a_worker_still_ends_with_its_parent(tmp_path):
+    script, pidfile = tmp_path / "parent.py", tmp_path / "worker.pid"
+    script.write_text(PARENT)
+    proc = subprocess.Popen([sys.executable, str(script), str(pidfile)], cwd=ROOT, env=_env(),
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not pidfile.exists() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        worker = int(pidfile.read_text())
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.monotonic() + 5
+        while _stat(worker) not in (None,) and _stat(worker)[0] != "Z" and time.monotonic() < deadline:
+            time.sleep(0.05)
+        state = _stat(worker)
+    finally:
+        for p in left_of(proc.pid, {}):
+            os.kill(p, signal.SIGKILL)
+    assert state is None or state[0] == "Z", f"the worker {worker} still runs 5 s after its parent was killed"
+
+
+def _wait_then_answer(flag, started, answer):
+    """A Dask task: says it started, waits for ``flag``, then writes what dask_task_cancelled() says."""
+    from autobones.batch.workers import dask_task_cancelled
+
+    Path(started).touch()
+    deadline = time.monotonic() + 60
+    while not os.path.exists(flag) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    Path(answer).write_text(str(dask_task_cancelled()))
+
+
+def test_a_dask_task_knows_when_its_batch_is_gone(tmp_path):
+    import distributed
+
+    from autobones.batch.workers import dask_task_cancelled
+
+    assert dask_task_cancelled() is False  # the client side
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        worker = next(iter(cluster.workers.values()))
+        futs = {}
+        for name in ("kept", "cancelled"):
+            args = [str(tmp_path / f"{name}.{k}") for k in ("flag", "started", "answer")]
+            futs[name] = (client.submit(_wait_then_answer, *args, pure=False), args)
+        deadline = time.monotonic() + 60
+        while not all(Path(a[1]).exists() for _, a in futs.values()) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        fut, args = futs["cancelled"]
+        key = fut.key
+        client.cancel(fut)  # what the scheduler does with the tasks of a client that is gone
+        deadline = time.monotonic() + 10
+        while getattr(worker.state.tasks.get(key), "state", None) not in (None, "cancelled") \
+                and time.monotonic() < deadline:
+            time.sleep(0.02)
+        for _, a in futs.values():
+            Path(a[0]).touch()
+        deadline = time.monotonic() + 30
+        while not all(Path(a[2]).exists() for _, a in futs.values()) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        futs["kept"][0].result(timeout=30)
+    assert Path(futs["kept"][1][2]).read_text() == "False"
+    assert Path(futs["cancelled"][1][2]).read_text() == "True"
 
 
 # --------------------------------------------------------------------------------------------------
