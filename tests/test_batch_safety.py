@@ -5,6 +5,7 @@ The heads are four small robot heads (1.3k vertices each, ~1 s a rig at ``--dens
 kill and race tests need a batch that runs for several seconds, not a large one.
 """
 import hashlib
+import json
 import os
 import signal
 import stat
@@ -342,13 +343,13 @@ def test_two_batches_at_once_one_refuses_naming_the_other_and_a_rerun_completes(
     lines = res[loser][1].splitlines()
     assert len(lines) == 1 and "another autobones batch" in lines[0], lines
     assert f"pid {procs[winner].pid}" in lines[0], (lines, procs[winner].pid)
-    rep = __import__("json").loads((out / REPORT_NAME).read_text())
+    rep = json.loads((out / REPORT_NAME).read_text())
     assert rep["counts"] == {"ok": 4, "failed": 0, "skipped": 0}, rep["counts"]
     got, ref = outputs(out), outputs(clean)
     assert sorted(got) == sorted(ref) and [k for k in ref if got[k] != ref[k]] == []
     r = run(["batch", str(heads), "-o", str(out), *ARGS])
     assert r.returncode == 0, r.stderr
-    rep = __import__("json").loads((out / REPORT_NAME).read_text())
+    rep = json.loads((out / REPORT_NAME).read_text())
     assert rep["counts"] == {"ok": 0, "failed": 0, "skipped": 4}, rep["counts"]
 
 

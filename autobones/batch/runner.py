@@ -37,6 +37,9 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
     -------
     dict
         The report (also written, atomically, to ``output_dir/batch_report.json``).
+
+    AutobonesError (nothing written) for overlapping folders, an output that resolves inside the
+    input (a symbolic link in the output tree), or another batch holding the output folder's lock.
     """
     if int(jobs) < 1:
         raise AutobonesError(f"--jobs {jobs}: give at least 1 worker process")
