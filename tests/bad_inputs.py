@@ -13,8 +13,8 @@ Every case is a small file (or a mesh plus a landmark file) built from the robot
 return ``{file name: Case}``.
 
 ``command_cases()`` (issue #33) are single commands given a hostile file argument (a device, a
-FIFO, a folder, a file over its size or row limit, JSON nested 100k deep, a newline in a name) or
-bad options; every one must end as ``expect="refused"``: one line on stderr containing ``needle``,
+FIFO, a folder, a file over its size or row limit, JSON nested 100k deep, a newline in a name),
+bad options, or a batch whose output tree links into its input; every one must end as ``expect="refused"``: one line on stderr containing ``needle``,
 exit code 2, nothing written, the inputs untouched, and no wait on a FIFO.
 ``write_command_case(folder, name, rig)`` makes the files and returns the argument list.
 
@@ -240,7 +240,9 @@ def command_cases():
     """{name: (args, what {file} is, Case)}: ``what`` is a function giving the bytes to write, ``"fifo"``, ``"folder"``,
     ``("sparse", n)`` (a sparse file of n bytes: over a limit without using the disk), a fixed path
     such as ``/dev/zero``, ``("sidecar", f)`` / ``("glb", f)`` (the rig's own file replaced by ``f()``),
-    ``("name", file name, bytes or None)`` or None (no file)."""
+    ``("name", file name, bytes or None)``, ``("batch_link", "folder" | "file")`` ({file} an input folder
+    holding ``sub/head.obj``, {out} an output folder whose ``sub`` links to the input's ``sub``, or whose
+    ``sub/head.glb`` links to ``head.obj``) or None (no file)."""
     pose = ["pose", "{rig}", "-o", "{out}.obj", "--definitions", "{file}"]
     animate = ["animate", "{rig}", "-o", "{out}.glb", "--capture", "{file}"]
     lm = ["landmarks", "{head}", "-o", "{out}.landmarks.json", "--from", "{file}"]
@@ -283,6 +285,12 @@ def command_cases():
     add("mesh_1e200_warnings", ["place", "{file}", "-o", "{out}.glb", "--density", "sparse"],
         ("name", "big.obj", None), "outlier",
         "the robot at x1e200: numpy's overflow RuntimeWarnings are held and dropped before the one-line error")
+    batch = ["batch", "{file}", "-o", "{out}", "--density", "sparse", "--force"]
+    add("batch_output_subfolder_linked_into_input", batch, ("batch_link", "folder"), "inside the input folder",
+        "batch IN -o OUT --force where OUT/sub links to IN/sub: every output resolved first, refused (was: rigs "
+        "written inside IN, IN/sub/scan.glb replaced by its own rig)")
+    add("batch_output_file_linked_to_input", batch, ("batch_link", "file"), "inside the input folder",
+        "batch IN -o OUT --force where OUT/sub/head.glb links to the input IN/sub/head.obj: refused")
     # argparse's own errors: one line and the command's --help (was: the usage block, 2-7 lines)
     add("argparse_missing_value", ["place", "--density"], None, "(see autobones place --help)",
         "an option without its value")
@@ -324,6 +332,16 @@ def write_command_case(folder, name, rig):
             fh.truncate(what[1])
     elif what and what[0] in ("sidecar", "glb"):  # the rig's own file replaced
         (folder / ("r.rig.json" if what[0] == "sidecar" else "r.glb")).write_bytes(what[1]())
+    elif what and what[0] == "batch_link":  # {file} is the input folder, {out} the output folder
+        file.mkdir()
+        (file / "sub").mkdir()
+        (file / "sub" / "head.obj").write_bytes(data(ROBOT).read_bytes())
+        (folder / "out").mkdir()
+        if what[1] == "folder":
+            (folder / "out" / "sub").symlink_to(file / "sub", target_is_directory=True)
+        else:
+            (folder / "out" / "sub").mkdir()
+            (folder / "out" / "sub" / "head.glb").symlink_to(file / "sub" / "head.obj")
     elif what and what[0] == "name":
         file = folder / what[1]
         if what[2] is None:  # the robot at x1e200

@@ -10,7 +10,9 @@ for a bad file, so any engine can run it: :func:`run_batch` sends it to a
 cluster (``scheduler``), and writes ``batch_report.json``.
 
 Layout: ``INPUT/a/b.obj`` -> ``OUTPUT/a/b.glb``, ``OUTPUT/a/b.rig.json``,
-``OUTPUT/a/b.weights.npz``. The output folder may not overlap the input folder.
+``OUTPUT/a/b.weights.npz``. The output folder may not overlap the input folder, and no output may
+resolve (through a symbolic link) inside it. One batch at a time writes into an output folder
+(:mod:`.lock`), and local workers die with the batch (:mod:`.workers`).
 
 Resuming: a file is skipped when its three outputs exist, are newer than the mesh
 (and its landmark file), and the sidecar records the same options hash
@@ -23,7 +25,8 @@ overwritten only with ``force=True``.
 
 Modules: :mod:`.jobs` (options, naming, the per-file job), :mod:`.planning` (walking the
 folders, what to run or skip), :mod:`.engines` (local processes, Dask), :mod:`.report`
-(the report and the summary table), :mod:`.runner` (:func:`run_batch`).
+(the report and the summary table), :mod:`.runner` (:func:`run_batch`), :mod:`.lock` (the output
+folder's lock), :mod:`.workers` (tying workers to the batch).
 """
 from .engines import run_dask, run_local
 from .jobs import LANDMARK_SUFFIXES, PARTIAL_SUFFIX, landmarks_for, make_options, options_hash, output_paths, rig_one

@@ -7,6 +7,7 @@ import shutil
 
 from ..errors import AutobonesError
 from .jobs import one_line, options_hash, partial_dir
+from .workers import init_worker
 
 log = logging.getLogger("autobones")
 
@@ -17,7 +18,8 @@ def run_local(jobs, fn, argsets, on_result):
     At most ``jobs`` files are in flight, so when a worker dies (a crash in native
     code, the out-of-memory killer) the files it may have held are known: they are
     run again one at a time, and the one that kills a worker alone is reported
-    failed. The batch goes on.
+    failed. The batch goes on. Workers die with this process (:mod:`.workers`): a batch killed
+    with ``kill -9`` leaves none behind.
     """
     import multiprocessing
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -29,7 +31,8 @@ def run_local(jobs, fn, argsets, on_result):
     pool = None
     try:
         while queue:
-            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=init_worker,
+                                       initargs=(os.getpid(),))
             running = {}
             broken = False
             while (queue or running) and not broken:
@@ -67,7 +70,7 @@ def run_local(jobs, fn, argsets, on_result):
 
 
 def _died_record(args):
-    input_path, output_path, options = args
+    input_path, output_path, options = args[:3]
     shutil.rmtree(partial_dir(output_path), ignore_errors=True)
     return {"input": input_path, "output": output_path, "status": "failed",
             "error": f"{input_path}: the worker process died on this file (a crash in native code or out of memory)",
@@ -99,8 +102,7 @@ def run_dask(address, fn, argsets, on_result, paths=()):
                                      f"by every worker, at the same path")
         if not argsets:
             return
-        ins, outs, opts = zip(*argsets)
-        futures = client.map(fn, ins, outs, opts, pure=False)
+        futures = client.map(fn, *zip(*argsets), pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         for fut in as_completed(futures):
             i = index[fut.key]

@@ -91,6 +91,24 @@ def partial_dir(glb_path):
     return os.path.join(folder, f".{name}{PARTIAL_SUFFIX}")
 
 
+def refuse_inside_input(paths, input_root, input_files=()):
+    """AutobonesError when one of ``paths``, resolved (every symbolic link on the way, the last
+    one included), lies inside the folder ``input_root`` or is one of ``input_files`` (resolved too).
+
+    A link in the output tree (``OUT/sub -> INPUT/sub``, ``OUT/a.glb -> INPUT/a.glb``) would
+    otherwise put outputs, temporaries included, inside the input, or a rig over its own mesh.
+    """
+    root = os.path.realpath(os.fspath(input_root))
+    files = {os.path.realpath(os.fspath(f)) for f in input_files}
+    for path in paths:
+        path = os.fspath(path)
+        real = os.path.realpath(path)
+        if real == root or real.startswith(root.rstrip(os.sep) + os.sep) or real in files:
+            where = f"the input file {real}" if real in files else f"{real}, inside the input folder {root}"
+            raise AutobonesError(f"{path}: resolves (through a symbolic link) to {where}; outputs are never "
+                                 "written inside the input folder: remove the link or choose another output folder")
+
+
 def one_line(text, limit=500):
     """``text`` with its whitespace runs made single spaces, cut to ``limit`` characters."""
     text = " ".join(str(text).split())
@@ -100,7 +118,7 @@ def one_line(text, limit=500):
 # ---------------------------------------------------------------------------------------------
 # the per-file job
 
-def rig_one(input_path, output_path, options):
+def rig_one(input_path, output_path, options, input_root=None):
     """Rig one mesh and write its glb and sidecars atomically; never raises for a bad file.
 
     Parameters
@@ -113,6 +131,9 @@ def rig_one(input_path, output_path, options):
         From :func:`make_options`: ``mode`` ('place' or 'transfer'), ``density``,
         ``rig``, ``random_state``. In transfer mode the landmarks are the file
         :func:`landmarks_for` finds beside the mesh.
+    input_root : str, optional
+        The batch's input folder: the outputs are resolved again just before they are
+        written and refused if a symbolic link made since the plan leads them inside it.
 
     Returns
     -------
@@ -138,7 +159,8 @@ def rig_one(input_path, output_path, options):
         with _one_blas_thread():
             rig = _make_rig(input_path, options, record)
         rig.batch = {"options": options, "options_hash": h}
-        _save_atomically(rig, output_path, partial, options.get("expressions", False), options.get("tissue", False))
+        _save_atomically(rig, output_path, partial, options.get("expressions", False), options.get("tissue", False),
+                         input_root)
         record.update(status="ok", timings={k: round(float(v), 4) for k, v in rig.timings.items()},
                       vertices=int(len(rig.vertices)), bones=int(len(rig.skeleton)))
     except AutobonesError as exc:
@@ -184,9 +206,13 @@ class _one_blas_thread:
         return False
 
 
-def _save_atomically(rig, output_path, partial, expressions=False, tissue=False):
+def _save_atomically(rig, output_path, partial, expressions=False, tissue=False, input_root=None):
     """Save into ``partial``, then rename glb, npz and last the sidecar (the commit mark) into place."""
+    from .workers import dask_task_cancelled, exit_if_orphaned
+
     folder = os.path.dirname(os.path.abspath(output_path))
+    if input_root is not None:  # the plan checked; a link made since must not lead us into the input
+        refuse_inside_input((partial, *output_paths(output_path)), input_root)
     try:
         os.makedirs(folder, exist_ok=True)
         if os.path.isdir(partial):
@@ -196,7 +222,12 @@ def _save_atomically(rig, output_path, partial, expressions=False, tissue=False)
         raise AutobonesError(f"{output_path}: cannot create the output folder ({exc.strerror or exc})") from exc
     staged = rig.save(os.path.join(partial, os.path.basename(output_path)), expressions=expressions, tissue=tissue)
     glb, js, npz = output_paths(output_path)
-    # all three or none (a failed rename puts back what was there), the sidecar last: it marks the file done
+    # all three or none (a failed rename puts back what was there), the sidecar last: it marks the file done;
+    # never by an orphan: a worker whose batch was killed leaves the .partial folder for the next run
+    exit_if_orphaned()
+    if dask_task_cancelled():
+        raise AutobonesError(f"{output_path}: the batch that asked for this file is gone (the Dask task was "
+                             "cancelled); nothing renamed")
     replace_all(((staged[0], glb), (staged[2], npz), (staged[1], js)), "the rig")
     try:
         os.rmdir(partial)

@@ -8,7 +8,8 @@ from ..errors import AutobonesError
 from ..io.files import read_json
 from ..io.atomic import BACKUP_SUFFIX
 from ..io.mesh import SUPPORTED
-from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir
+from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir, refuse_inside_input
+from .report import REPORT_NAME
 
 
 @dataclass
@@ -70,7 +71,8 @@ def plan(input_dir, output_dir, options, force=False):
 
     Refused: two inputs that would write the same output (``a.obj`` and ``a.ply``),
     and, without ``force``, outputs that exist but are older than the input or were
-    made with other options.
+    made with other options. AutobonesError, before anything is written, when a symbolic
+    link in the output tree leads any output inside the input folder or onto an input.
     """
     inp, out = check_folders(input_dir, output_dir)
     h = options_hash(options)
@@ -79,6 +81,10 @@ def plan(input_dir, output_dir, options, force=False):
         rel = os.path.relpath(path, inp)
         glb = os.path.join(out, os.path.splitext(rel)[0] + ".glb")
         items.append(Item(input=path, rel=rel.replace(os.sep, "/"), output=glb))
+    # every path the batch writes, resolved: the planned names, their .partial folders, the report
+    written = [p for it in items for p in (*output_paths(it.output), partial_dir(it.output))]
+    sources = [it.input for it in items] + [lm for lm in map(landmarks_for, (it.input for it in items)) if lm]
+    refuse_inside_input(written + [os.path.join(out, REPORT_NAME)], inp, sources)
     owners = {}
     for it in items:
         for target in output_paths(it.output):

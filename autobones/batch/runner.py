@@ -8,6 +8,7 @@ from ..errors import AutobonesError
 from ..io.atomic import probe_folder
 from .engines import run_dask, run_local
 from .jobs import options_hash, rig_one
+from .lock import batch_lock
 from .planning import check_folders, clean_stale_temps, plan
 from .report import REPORT_FORMAT, REPORT_NAME, STATUSES, public_record, write_report
 
@@ -36,14 +37,22 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
     -------
     dict
         The report (also written, atomically, to ``output_dir/batch_report.json``).
+
+    AutobonesError (nothing written) for overlapping folders, an output that resolves inside the
+    input (a symbolic link in the output tree), or another batch holding the output folder's lock.
     """
     if int(jobs) < 1:
         raise AutobonesError(f"--jobs {jobs}: give at least 1 worker process")
     t0 = time.perf_counter()
-    items = plan(input_dir, output_dir, options, force=force)
     inp, out = check_folders(input_dir, output_dir)
     probe_folder(out)  # up front: a folder that cannot be written fails the command, not every file
-    clean_stale_temps(out)
+    with batch_lock(out):  # one batch at a time in a folder, planned under the lock: what it sees stays true
+        items = plan(inp, out, options, force=force)  # refuses links into the input before anything is written
+        clean_stale_temps(out)
+        return _run(items, inp, out, options, jobs, scheduler, force, on_start, on_result, t0)
+
+
+def _run(items, inp, out, options, jobs, scheduler, force, on_start, on_result, t0):
     h = options_hash(options)
     to_run = [it for it in items if it.action == "run"]
     if on_start:
@@ -62,7 +71,7 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
         if on_result:
             on_result(public_record(record, inp, out, options))
 
-    argsets = [(it.input, it.output, options) for it in to_run]
+    argsets = [(it.input, it.output, options, inp) for it in to_run]
     if scheduler:
         run_dask(scheduler, rig_one, argsets, done, paths=(inp, out))
     else:
