@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import os
+import contextlib
 import tempfile
 
 import numpy as np
@@ -394,6 +395,43 @@ def validate_stage(stage_or_path):
     return out
 
 
+def _export(stage, tmp, out_path, ext):
+    """Write ``stage`` to the temporary ``tmp`` (``out_path``'s format)."""
+    if ext == ".usdz":
+        from pxr import UsdUtils
+
+        with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
+            inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
+            if not stage.GetRootLayer().Export(inner):
+                raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+            os.remove(tmp)  # the packager refuses to replace a file
+            if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
+                raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
+    elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
+        raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+
+
+@contextlib.contextmanager
+def usd_errors(out_path):
+    """USD's errors while writing ``out_path`` as one AutobonesError line. Without a ``Tf.Error.Mark``
+    usd-core prints each error itself (a full disk: thousands of lines as the check then read the
+    truncated file) and carries on; under one, the first error raises ``Tf.ErrorException`` here."""
+    from pxr import Tf
+
+    mark = Tf.Error.Mark()
+    mark.SetMark()
+    try:
+        yield
+    except Tf.ErrorException as exc:
+        text = " ".join(str(exc).split())
+        why = "no space left on device" if "No space left" in text else text.split(" : ")[-1][:160] or "an error"
+        raise AutobonesError(f"{out_path}: usd-core could not write it ({why.strip(chr(39))})") from None
+    except OSError as exc:
+        raise AutobonesError(f"{out_path}: cannot write the USD file ({exc.strerror or exc})") from None
+    finally:
+        mark.Clear()
+
+
 def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     """Write the rig saved as ``rig_path`` to ``out_path`` as a UsdSkel stage (see the module doc).
 
@@ -433,21 +471,11 @@ def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     fd, tmp = temp_beside(out_path, suffix=ext)
     os.close(fd)
     try:
-        if ext == ".usdz":
-            from pxr import UsdUtils
-
-            with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
-                inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
-                if not stage.GetRootLayer().Export(inner):
-                    raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-                os.remove(tmp)  # the packager refuses to replace a file
-                if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
-                    raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
-        elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
-            raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-        findings = validate_stage(tmp)
+        with usd_errors(out_path):
+            _export(stage, tmp, out_path, ext)
+            findings = validate_stage(tmp)
         replace_all([(tmp, out_path)], "the USD file")
-    finally:
+    finally:  # a partial file (a full disk) never stays
         if os.path.exists(tmp):
             os.remove(tmp)
     rig = src.rig

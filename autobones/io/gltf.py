@@ -369,13 +369,25 @@ def read_glb(path):
         if len(chunk) != length:
             raise ValueError("the file is truncated")
         if kind == b"JSON":
-            doc = json.loads(chunk)
+            doc = _json_chunk(chunk)
         elif kind == b"BIN\0":
             body = chunk
         off += 8 + length
     if not isinstance(doc, dict):
         raise ValueError("no JSON chunk")
     return doc, body
+
+
+def _json_chunk(chunk):
+    """The glb's JSON chunk parsed, after the depth scan every other JSON autobones reads has
+    (``io/files.py``): nested 100k deep, ``json.loads`` would end in a RecursionError."""
+    from .files import MAX_JSON_DEPTH, json_depth
+
+    depth = json_depth(chunk)
+    if depth > MAX_JSON_DEPTH:
+        raise ValueError(f"its JSON chunk is nested {depth} levels deep, more than the {MAX_JSON_DEPTH} autobones "
+                         "reads: a damaged file")
+    return json.loads(chunk)
 
 
 def read_accessor(doc, body, index):
