@@ -39,8 +39,12 @@ def build_rig(base, landmarks, **kwargs):
     from .io.landmarks import resolve_landmarks
     from .io.mesh import resolve_mesh
 
+    from .io.landmark_checks import validate_landmarks
+
     V, F, _ = resolve_mesh(base)
-    lm, _ = resolve_landmarks(landmarks)
+    lm, source = resolve_landmarks(landmarks)
+    # the unit and surface check transfer has (issue #33: landmarks in cm on a head in m built a rig 226 m off)
+    lm = validate_landmarks(lm, V, F, min_count=1, source=source)
     return _build(V, F, lm, **kwargs)
 
 __all__ = ["AutobonesError", "ExpressionModel", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh", "load_rig",

@@ -254,7 +254,7 @@ def _add_morph_targets(buf, mesh, morph_targets, V):
         mesh["extras"] = {"targetNames": target_names}
 
 
-def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
+def glb_bytes(V, F, skin=None, extras=None, morph_targets=(), path=None):
     """The .glb file of one triangle mesh, skinned when ``skin`` is given, as bytes.
 
     Parameters
@@ -269,8 +269,18 @@ def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
         JSON-serialisable data stored in the asset's ``extras``.
     morph_targets : sequence of (name, (n, 3) float)
         See :func:`write_glb`.
+    path : str or None
+        The file the bytes are for, named in the message when a value is not finite.
+
+    AutobonesError when a position, a morph target or a bind matrix is NaN or infinite in float32
+    (a finite 1e300 is infinite there): nothing non-finite is ever written.
     """
+    from ..arguments import finite_output
+
     V = np.asarray(V, dtype=np.float32)
+    finite_output(path, "the glb", ("positions (float32)", V),
+                  *((f"morph target {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in morph_targets),
+                  *(() if skin is None else (("inverse bind matrices", skin.inverse_binds),)))
     F = np.asarray(F, dtype=np.uint32)
     buf = GlbBuffer()
     attributes = {"POSITION": buf.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)}
@@ -333,7 +343,7 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         frame's own x, y, z (right for a head stored +Y up, facing +Z).
     """
     data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers, axes), extras=extras,
-                     morph_targets=morph_targets)
+                     morph_targets=morph_targets, path=path)
     with open(path, "wb") as fh:
         fh.write(data)
 
@@ -432,8 +442,12 @@ def add_animation(doc, body, name, times, channels):
     inp = buf.add(t, FLOAT, "SCALAR")
     buf.accessors[inp]["min"], buf.accessors[inp]["max"] = [float(t.min())], [float(t.max())]
     samplers, chans = [], []
+    from ..arguments import finite_output
+
+    finite_output(None, "the animation", ("key times (float32)", t))
     for node, path, values in channels:
         values = np.asarray(values, dtype=np.float32)
+        finite_output(None, "the animation", (f"{path} keys of node {node} (float32)", values))
         if len(values) != len(t):
             raise ValueError(f"animation channel {path} of node {node}: {len(values)} keys for {len(t)} times")
         atype = {"weights": "SCALAR", "rotation": "VEC4", "translation": "VEC3"}[path]
