@@ -20,12 +20,11 @@ if _util.find_spec(__name__ + ".generic_rig") is None:
 
 from .errors import AutobonesError
 from .io.mesh import load_mesh
-from .orient import Frame, detect_frame
+from .orient import Frame
 from .placement.pipeline import place
 from .rig import Rig
 from .skeleton import Skeleton
-from .rig_transfer.pipeline import transfer
-from .rig_transfer.fields import transfer_attributes
+from .api import detect_frame, transfer, transfer_attributes  # their arguments checked (issue #33)
 from .labelled_rig import LabelledRig
 from .landmarks.detect import detect_landmarks
 from .expressions.model import ExpressionModel

@@ -72,7 +72,7 @@ def index_array(value, name, shape, count):
 
 
 def _shape(shape):
-    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
 
 
 def finite_output(path, what, *arrays):

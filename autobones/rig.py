@@ -320,7 +320,9 @@ class Rig:
             expression definitions in the sidecar (``expressions``), so a loaded rig
             poses any mix the same way.
         """
-        path = os.fspath(path)
+        from .arguments import path_argument
+
+        path = path_argument(path, "path")
         if not path.lower().endswith(".glb"):
             raise AutobonesError(f"{path}: the output must be a .glb file")
         json_path, npz_path = sidecar_paths(path)

@@ -151,6 +151,10 @@ class ExpressionModel:
     def fit(self, rig):
         """Build the skin, wires, locators, constraints, creases, lids and jaw weights on ``rig``
         (a transferred :class:`autobones.rig.Rig`, or any object with its attributes)."""
+        missing = [a for a in ("vertices", "faces", "frame", "skeleton", "weights") if not hasattr(rig, a)]
+        if missing:  # rig=42: one line naming the argument, not an AttributeError inside
+            raise AutobonesError(f"rig: expected an autobones Rig (autobones.transfer or load_rig), not "
+                                 f"{type(rig).__name__} (it has no {missing[0]})")
         self.doc_ = load_expressions(self.definitions)
         p = self.params_ = model_parameters(self.doc_)
         types = muscle_types(self.doc_)

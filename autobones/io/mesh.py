@@ -54,7 +54,9 @@ def load_mesh(path, strays=False):
         infinite coordinates; face indices out of range; a flat or tiny mesh; an
         outlier far from the rest (:data:`OUTLIER_REACH`); faces of (almost) zero area.
     """
-    path = os.fspath(path)
+    from ..arguments import path_argument
+
+    path = path_argument(path, "path")
     name = os.path.basename(path)
     if not os.path.isfile(path):
         raise AutobonesError(f"{path}: no such file")

@@ -14,6 +14,7 @@ import zipfile
 
 import numpy as np
 
+from ..arguments import path_argument
 from ..errors import AutobonesError
 from .files import read_json, shown
 from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
@@ -62,7 +63,7 @@ def load_rig(path):
     >>> rig = autobones.load_rig("head.glb")
     >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
     """
-    path = os.fspath(path)
+    path = path_argument(path, "path")  # load_rig(None): one line naming the argument, not a TypeError
     doc, body = _read_autobones_glb(path)
     json_path, npz_path = sidecar_paths(path)
     for side in (json_path, npz_path):
