@@ -27,6 +27,18 @@ def placed_rig(tmp_path_factory):
     return folder / "robot.glb"
 
 
+@pytest.fixture(scope="module")
+def transferred_rig(tmp_path_factory):
+    """A saved transfer rig of the robot head with its ARKit shapes (~3 s): muscles, landmarks and the
+    definitions in its sidecar, for the tampered-sidecar, pose and animate cases."""
+    import autobones
+
+    folder = tmp_path_factory.mktemp("trig")
+    autobones.transfer(data(bad_inputs.ROBOT), landmarks=str(bad_inputs.ROBOT_LANDMARKS), arkit=True).save(
+        folder / "robot.glb")
+    return folder / "robot.glb"
+
+
 def _snapshot(folder):
     """Every entry under ``folder``: a regular file's SHA-256, else its type (a FIFO is never opened)."""
     out = {}
@@ -40,8 +52,8 @@ def _snapshot(folder):
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, name):
-    args = bad_inputs.write_command_case(tmp_path, name, placed_rig)
+def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, transferred_rig, name):
+    args = bad_inputs.write_command_case(tmp_path, name, placed_rig, transferred_rig)
     case = CASES[name][2]
     before = _snapshot(tmp_path)
     env = dict(os.environ, PYTHONPATH=str(ROOT))
