@@ -250,16 +250,18 @@ def build_stage(src, meters_per_unit=None, max_influences=None):
     skel.CreateRestTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.local]))
 
     mesh = UsdGeom.Mesh.Define(stage, "/Rig/Mesh")
-    V = np.asarray(rig.vertices, dtype=np.float32)
     F = np.asarray(rig.faces, dtype=np.int32)
-    # the last line of defence (issue #33): nothing non-finite reaches the stage, whatever the rig holds
-    finite_output(None, "the USD stage", ("points (float32)", V),
-                  *((f"blend shape {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in src.morph_targets),
-                  *((f"animation {a.name}", x) for a in src.animations
-                    for x in (a.times, a.translations, a.rotations, a.scales)
-                    if x is not None),
-                  *((f"animation {a.name} weights (float32)", np.asarray(a.morph_weights, dtype=np.float32))
-                    for a in src.animations if a.morph_weights is not None))
+    # the last line of defence (issue #33): nothing non-finite reaches the stage, whatever the rig holds; a
+    # value past float32's range is named by the check, not warned of by numpy
+    with np.errstate(over="ignore"):
+        V = np.asarray(rig.vertices, dtype=np.float32)
+        finite_output(None, "the USD stage", ("points (float32)", V),
+                      *((f"blend shape {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in src.morph_targets),
+                      *((f"animation {a.name}", x) for a in src.animations
+                        for x in (a.times, a.translations, a.rotations, a.scales)
+                        if x is not None),
+                      *((f"animation {a.name} weights (float32)", np.asarray(a.morph_weights, dtype=np.float32))
+                        for a in src.animations if a.morph_weights is not None))
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(V)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(F), 3, dtype=np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(F.ravel())))

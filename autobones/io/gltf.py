@@ -277,10 +277,11 @@ def glb_bytes(V, F, skin=None, extras=None, morph_targets=(), path=None):
     """
     from ..arguments import finite_output
 
-    V = np.asarray(V, dtype=np.float32)
-    finite_output(path, "the glb", ("positions (float32)", V),
-                  *((f"morph target {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in morph_targets),
-                  *(() if skin is None else (("inverse bind matrices", skin.inverse_binds),)))
+    with np.errstate(over="ignore"):  # a value past float32's range is named by the check below, not warned of
+        V = np.asarray(V, dtype=np.float32)
+        finite_output(path, "the glb", ("positions (float32)", V),
+                      *((f"morph target {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in morph_targets),
+                      *(() if skin is None else (("inverse bind matrices", skin.inverse_binds),)))
     F = np.asarray(F, dtype=np.uint32)
     buf = GlbBuffer()
     attributes = {"POSITION": buf.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)}
@@ -446,7 +447,8 @@ def add_animation(doc, body, name, times, channels):
 
     finite_output(None, "the animation", ("key times (float32)", t))
     for node, path, values in channels:
-        values = np.asarray(values, dtype=np.float32)
+        with np.errstate(over="ignore"):  # named by the check below
+            values = np.asarray(values, dtype=np.float32)
         finite_output(None, "the animation", (f"{path} keys of node {node} (float32)", values))
         if len(values) != len(t):
             raise ValueError(f"animation channel {path} of node {node}: {len(values)} keys for {len(t)} times")
