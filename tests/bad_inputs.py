@@ -468,3 +468,60 @@ def crash_on_crash(input_path, output_path, options):
     if os.path.basename(input_path).startswith("crash."):
         os._exit(139)
     return rig_one(input_path, output_path, options)
+
+
+def api_cases():
+    """Issue #33 item 8: {name: (call, needle, why)}: ``call(ctx)`` calls a public entry point with a wrong
+    type, shape or value, and must raise AutobonesError (a ValueError) whose message contains ``needle``
+    (the argument's name). ``ctx``: ``V``, ``F`` (the robot), ``lm`` (its landmark dict), ``rig`` (its
+    transferred Rig) and ``defs`` (a copy of the shipped definitions)."""
+    import autobones
+
+    nan = float("nan")
+    inf = float("inf")
+
+    def smoothing_nan(c):
+        c.defs["model"]["smoothing"] = nan
+        return autobones.ExpressionModel(c.defs).fit(c.rig)
+
+    return {
+        "place_ragged_faces": (lambda c: autobones.place((c.V, [[0, 1, 2], [1, 2]])), "faces",
+                               "faces as a ragged list (was: ValueError from numpy, or silently truncated)"),
+        "place_fractional_faces": (lambda c: autobones.place((c.V, c.F + 0.5)), "whole vertex indices",
+                                   "faces of 0.5, 1.5...: refused, never cut to 0, 1 by astype"),
+        "place_text_vertices": (lambda c: autobones.place((c.V.astype(str), c.F)), "vertices",
+                                "vertices as strings"),
+        "transfer_landmarks_list": (lambda c: autobones.transfer((c.V, c.F), landmarks=list(c.lm.values())),
+                                    "landmarks", "landmarks as a list of points: no names to go by"),
+        "transfer_landmark_nan": (lambda c: autobones.transfer((c.V, c.F), landmarks={**c.lm, "vertex": [nan, 0, 0]}),
+                                  "vertex", "a landmark with a NaN coordinate"),
+        "transfer_rig_42": (lambda c: autobones.transfer((c.V, c.F), landmarks=c.lm, rig=42), "rig:",
+                            "rig=42 (was: AttributeError)"),
+        "load_rig_none": (lambda c: autobones.load_rig(None), "path:", "load_rig(None) (was: TypeError)"),
+        "load_mesh_number": (lambda c: autobones.load_mesh(3.5), "path:", "load_mesh(3.5) (was: TypeError)"),
+        "detect_frame_fractional_faces": (lambda c: autobones.detect_frame(c.V, c.F + 0.5), "F:",
+                                          "detect_frame with fractional faces (was: IndexError)"),
+        "detect_frame_flat_list": (lambda c: autobones.detect_frame([1.0, 2.0, 3.0], c.F), "V:",
+                                   "detect_frame with three numbers as V (was: IndexError)"),
+        "detect_frame_face_out_of_range": (lambda c: autobones.detect_frame(c.V, c.F + len(c.V)), "F:",
+                                           "face indices past the vertices"),
+        "pose_head_inf": (lambda c: c.rig.pose(head_deg=[inf, 0, 0]), "head_deg",
+                          "pose(head_deg=[inf, 0, 0]) (was: NaN vertices returned)"),
+        "pose_au_1e308": (lambda c: c.rig.pose(au={12: 1e308}), "au 12", "an AU at 1e308 (was: inf vertices)"),
+        "pose_au_list": (lambda c: c.rig.pose(au=[12]), "au:", "au as a list"),
+        "pose_gaze_shape": (lambda c: c.rig.pose(gaze=[1.0, 2.0, 3.0]), "gaze", "gaze of 3 angles"),
+        "pose_jaw_text": (lambda c: c.rig.pose(jaw_deg="wide"), "jaw_deg", "jaw_deg a string"),
+        "expression_model_fit_42": (lambda c: autobones.ExpressionModel().fit(42), "rig:",
+                                    "ExpressionModel().fit(42) (was: AttributeError)"),
+        "expression_model_definitions_42": (lambda c: autobones.ExpressionModel(42).fit(c.rig), "definitions",
+                                            "ExpressionModel(42)"),
+        "expression_model_nan_smoothing": (smoothing_nan, "model.smoothing is nan",
+                                           "definitions given as a dict with NaN smoothing (was: NaN vertices)"),
+        "build_rig_landmarks_list": (lambda c: autobones.build_rig((c.V, c.F), [[0.0, 0.0, 0.0]]), "landmarks",
+                                     "build_rig with a list of points"),
+        "build_rig_centimetres": (lambda c: autobones.build_rig((c.V, c.F), {k: [x * 100 for x in v]
+                                                                         for k, v in c.lm.items()}), "centimetres",
+                                  "build_rig with landmarks x100: the unit check of transfer"),
+        "labelled_rig_load_none": (lambda c: autobones.LabelledRig.load(None), "folder:", "LabelledRig.load(None)"),
+        "save_path_none": (lambda c: c.rig.save(None), "path:", "rig.save(None)"),
+    }

@@ -192,9 +192,12 @@ def _as_arrays(V, F, name):
     """``V`` float64 and ``F`` as numpy arrays; AutobonesError naming ``name`` for ragged lists
     (rows of different lengths) or values that are not numbers."""
     try:
+        kind = np.asarray(V).dtype.kind
         V = np.asarray(V, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise AutobonesError(f"{name}: the vertices are not an (n, 3) array of numbers ({str(exc)[:80]})") from None
+    if kind in "USb":  # numpy would parse "0.5" and take True as 1: text or truth values are not coordinates
+        raise AutobonesError(f"{name}: the vertices are not an (n, 3) array of numbers (dtype {kind!r})")
     try:
         F = np.asarray(F)
     except ValueError as exc:  # numpy refuses ragged nested lists
