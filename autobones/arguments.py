@@ -85,3 +85,42 @@ def finite_output(path, what, *arrays):
             bad = int((~np.isfinite(a)).sum())
             raise AutobonesError(f"{os.fspath(path) if path else what}: not written: {bad} NaN or infinite values in "
                                  f"the {name} (out-of-range inputs); {what} is never written with them")
+
+
+# Out-of-range pose controls are refused, not posed (issue #33 item 6: an AU at 1e308 put every vertex
+# at infinity). 1 is a unit's full action and "larger extrapolates", so up to 10 times it is allowed;
+# angles (gaze, head, neck) within half a turn either way, the jaw within a right angle.
+MAX_INTENSITY = 10.0
+MAX_ANGLE = 180.0
+
+
+def intensity_mixes(au, expression, muscles, eyelids):
+    """The intensity dicts of ``ExpressionModel.parameters`` (an expression name is ``{name: 1}``), each
+    value a finite number within ``±MAX_INTENSITY``; AutobonesError naming the control and key otherwise."""
+    from collections.abc import Mapping
+
+    if isinstance(expression, str):
+        expression = {expression: 1.0}
+    out = []
+    for name, mix in (("au", au), ("expression", expression), ("muscles", muscles), ("eyelids", eyelids)):
+        if mix is None:
+            out.append(None)
+            continue
+        if not isinstance(mix, Mapping):
+            raise AutobonesError(f"{name}: expected a dict (key -> intensity), not {type(mix).__name__}")
+        out.append({k: real(v, f"{name} {k}", -MAX_INTENSITY, MAX_INTENSITY) for k, v in mix.items()})
+    return out
+
+
+def pose_angles(gaze, look_at, head_deg, neck_deg):
+    """``gaze`` (2,), ``look_at`` (3,), ``head_deg`` and ``neck_deg`` (3,) as finite float arrays (None
+    kept), the angles within ``±MAX_ANGLE`` degrees; AutobonesError naming the argument otherwise
+    (``head_deg=[inf, 0, 0]`` returned NaN vertices)."""
+    out = []
+    for name, value, n in (("gaze", gaze, 2), ("look_at", look_at, 3), ("head_deg", head_deg, 3),
+                           ("neck_deg", neck_deg, 3)):
+        a = None if value is None else float_array(value, name, (n,))
+        if a is not None and name != "look_at" and np.abs(a).max() > MAX_ANGLE:
+            raise AutobonesError(f"{name}: {a.tolist()} degrees, outside [-{MAX_ANGLE:g}, {MAX_ANGLE:g}]")
+        out.append(a)
+    return out

@@ -345,10 +345,11 @@ def test_usd_stage_refuses_non_finite_points(transferred_rig):
 def test_schema_refuses_what_autobones_never_writes(placed_rig):
     """rig_schema on its own: the sidecar autobones wrote passes; each edit is named by its key."""
     from autobones.io.rig_schema import SchemaError, check_definitions, check_sidecar
+    from autobones.expressions.definitions import MODEL_DEFAULTS
     from autobones.generic_rig import expressions_path
 
     meta = json.loads(placed_rig.with_name("robot.rig.json").read_text())
-    assert check_sidecar(meta) == meta["vertex_count"]
+    assert check_sidecar(meta, MODEL_DEFAULTS) == meta["vertex_count"]
     for path, value, needle in ((("bones", 0, "head"), [0, 0], r"bones\[0\].head is a list of 2"),
                                 (("bones", 1, "parent"), "nobody", "not a bone listed before it"),
                                 (("labels", 0), -1, "labels holds -1"),
@@ -363,9 +364,9 @@ def test_schema_refuses_what_autobones_never_writes(placed_rig):
             node = node[k]
         node[path[-1]] = value
         with pytest.raises(SchemaError, match=needle):
-            check_sidecar(edited)
+            check_sidecar(edited, MODEL_DEFAULTS)
     defs = json.loads(open(expressions_path()).read())
-    check_definitions(defs)
+    check_definitions(defs, MODEL_DEFAULTS)
     defs["model"]["smoothing"] = float("nan")  # a dict through the API never passed the JSON reader
     with pytest.raises(SchemaError, match="definitions.model.smoothing is nan"):
-        check_definitions(defs)
+        check_definitions(defs, MODEL_DEFAULTS)

@@ -75,7 +75,7 @@ def load_expressions(path=None):
         path = expressions_path()
     if isinstance(path, dict):  # the API's own dict, or a sidecar's: checked as a file is
         try:
-            check_definitions(path)
+            check_definitions(path, MODEL_DEFAULTS)
         except SchemaError as exc:
             raise AutobonesError(f"expression definitions: {exc}") from None
         return path
@@ -85,7 +85,7 @@ def load_expressions(path=None):
     doc = read_json(path, "definitions", invalid="cannot read the expression definitions",  # bounded
                     parse_constant=no_constants, parse_float=finite_float)
     try:
-        check_definitions(doc)
+        check_definitions(doc, MODEL_DEFAULTS)
     except SchemaError as exc:
         raise AutobonesError(f"{shown(path)}: cannot read the expression definitions ({exc})") from None
     return doc

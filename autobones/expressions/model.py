@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arguments import float_array, real
+from ..arguments import MAX_ANGLE, float_array, intensity_mixes, pose_angles, real
 from ..errors import AutobonesError
 from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
@@ -266,10 +266,10 @@ class ExpressionModel:
             ``eyelids`` (4,) float in :data:`LIDS` order.
         """
         self._check()
-        au, expression, muscles, eyelids = _checked_mixes(au, expression, muscles, eyelids)
+        au, expression, muscles, eyelids = intensity_mixes(au, expression, muscles, eyelids)
         c = np.zeros(len(self.muscle_names_))
         lids = np.zeros(4)
-        jaw = real(jaw_deg, "jaw_deg", -MAX_ANGLE / 2, MAX_ANGLE / 2)
+        jaw = real(jaw_deg, "jaw_deg", -MAX_ANGLE / 2, MAX_ANGLE / 2)  # a jaw opens less than a right angle
         mix = {}
         if expression is not None:
             ex = {expression: 1.0} if isinstance(expression, str) else dict(expression)
@@ -415,17 +415,9 @@ class ExpressionModel:
             Vertices in the input frame and units.
         """
         self._check()
-        gaze = None if gaze is None else float_array(gaze, "gaze", (2,))
-        look_at = None if look_at is None else float_array(look_at, "look_at", (3,))
-        for name, angles in (("head_deg", head_deg), ("neck_deg", neck_deg), ("gaze", gaze)):
-            if angles is not None and np.abs(float_array(angles, name, (len(angles),))).max() > MAX_ANGLE:
-                raise AutobonesError(f"{name}: {np.asarray(angles).tolist()} degrees, outside "
-                                     f"[-{MAX_ANGLE:g}, {MAX_ANGLE:g}]")
-        try:
-            c = np.asarray(contractions, dtype=np.float64).reshape(-1)
-        except (TypeError, ValueError):
-            raise AutobonesError(f"contractions: expected numbers, not {type(contractions).__name__}") from None
-        c = float_array(c, "contractions", (None,))
+        gaze, look_at, head_deg, neck_deg = pose_angles(gaze, look_at, head_deg, neck_deg)
+        c = float_array(np.reshape(contractions, -1) if np.ndim(contractions) else contractions, "contractions",
+                        (None,))
         if c.shape != (len(self.muscle_names_),):
             raise AutobonesError(f"contractions: expected {len(self.muscle_names_)} values, got {c.shape}")
         Vc = self.canonical_
@@ -503,27 +495,3 @@ class ExpressionModel:
         return blend_bones(d, V, self.jaw_weights_, moves)
 
 
-
-# Out-of-range controls are refused, not posed (issue #33 item 6): an AU at 1e308 put every vertex at
-# infinity. 1 is a unit's full action and "larger extrapolates", so up to 10 times it is allowed;
-# angles (jaw, gaze, head, neck) within a turn and a half either way.
-MAX_INTENSITY = 10.0
-MAX_ANGLE = 180.0
-
-
-def _checked_mixes(au, expression, muscles, eyelids):
-    """The intensity dicts of :meth:`ExpressionModel.parameters`, each value a finite number within
-    ``±MAX_INTENSITY``; AutobonesError naming the control and key otherwise."""
-    from collections.abc import Mapping
-
-    if isinstance(expression, str):
-        expression = {expression: 1.0}
-    out = []
-    for name, mix in (("au", au), ("expression", expression), ("muscles", muscles), ("eyelids", eyelids)):
-        if mix is None:
-            out.append(None)
-            continue
-        if not isinstance(mix, Mapping):
-            raise AutobonesError(f"{name}: expected a dict (key -> intensity), not {type(mix).__name__}")
-        out.append({k: real(v, f"{name} {k}", -MAX_INTENSITY, MAX_INTENSITY) for k, v in mix.items()})
-    return out

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..arguments import path_argument
 from ..errors import AutobonesError
+from ..expressions.definitions import MODEL_DEFAULTS
 from .files import read_json, shown
 from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
 from .gltf import read_accessor, read_glb
@@ -145,7 +146,7 @@ def _read_sidecar(json_path):
         if not isinstance(meta, dict) or meta.get("format") != SIDECAR_FORMAT:
             raise SchemaError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
                               f"expected {SIDECAR_FORMAT!r}")
-        n = check_sidecar(meta)
+        n = check_sidecar(meta, MODEL_DEFAULTS)
     except SchemaError as exc:
         raise AutobonesError(f"{shown(json_path)}: not a readable autobones sidecar ({exc})") from None
     bones = meta["bones"]

@@ -172,9 +172,10 @@ def check_int_list(values, key, low, high, n=None):
     return np.asarray(values, dtype=np.int64)
 
 
-def check_sidecar(meta):
+def check_sidecar(meta, model_defaults):
     """SchemaError naming the first key of the sidecar dict ``meta`` that is malformed (see the
-    module doc); returns its vertex count. The caller has checked ``format``."""
+    module doc); returns its vertex count. The caller has checked ``format``; ``model_defaults``: see
+    :func:`check_definitions`."""
     n = integer(meta.get("vertex_count"), "vertex_count", 3, MAX_VERTICES)
     check_bones(meta.get("bones"))
     check_frame(meta.get("frame"))
@@ -189,7 +190,7 @@ def check_sidecar(meta):
     if meta.get("expressions") is not None:
         mapping(meta["expressions"], "expressions")
     if defs is not None:
-        check_definitions(defs, "expressions.definitions")
+        check_definitions(defs, model_defaults, "expressions.definitions")
     return n
 
 
@@ -228,18 +229,18 @@ def _check_attributes(meta, n):
 # ---------------------------------------------------------------------------------------------------
 # expression definitions
 
-def check_definitions(doc, key="definitions"):
+def check_definitions(doc, model_defaults, key="definitions"):
     """SchemaError naming the first malformed entry of the expression definitions ``doc``: the four
     sections objects, every number finite, the ``model`` numbers numbers, each muscle type's
     ``shortening``/``dropoff``/``wire``, each action unit's ``muscles`` weights, ``jaw_deg`` and
-    ``eyelids``, each expression's ``au`` intensities."""
+    ``eyelids``, each expression's ``au`` intensities. ``model_defaults``: the ``model`` section's
+    fallbacks (``expressions.definitions.MODEL_DEFAULTS``, given by the caller: that module reads
+    definitions through this one), whose types the file's values must have."""
     mapping(doc, key)
     for section in ("model", "muscle_types", "action_units", "expressions"):
         mapping(doc.get(section), f"{key}.{section}")
     check_finite_tree(doc, key)
-    from ..expressions.definitions import MODEL_DEFAULTS
-
-    _check_like(doc["model"], MODEL_DEFAULTS, f"{key}.model")
+    _check_like(doc["model"], model_defaults, f"{key}.model")
     for name, spec in doc["muscle_types"].items():
         where = f"{key}.muscle_types.{name}"
         mapping(spec, where)
