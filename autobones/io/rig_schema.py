@@ -238,7 +238,9 @@ def check_definitions(doc, model_defaults, key="definitions"):
     definitions through this one), whose types the file's values must have."""
     mapping(doc, key)
     for section in ("model", "muscle_types", "action_units", "expressions"):
-        mapping(doc.get(section), f"{key}.{section}")
+        if section not in doc:
+            raise SchemaError(f"{key} has no {section!r}")
+        mapping(doc[section], f"{key}.{section}")
     check_finite_tree(doc, key)
     _check_like(doc["model"], model_defaults, f"{key}.model")
     for name, spec in doc["muscle_types"].items():
