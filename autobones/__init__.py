@@ -21,10 +21,10 @@ if _util.find_spec(__name__ + ".generic_rig") is None:
 from .errors import AutobonesError
 from .io.mesh import load_mesh
 from .orient import Frame
-from .placement.pipeline import place
+# before .rig: placement's package imports the Rig as it loads (the order __init__ always had)
+from .api import detect_frame, place, transfer, transfer_attributes  # their arguments checked (issue #33)
 from .rig import Rig
 from .skeleton import Skeleton
-from .api import detect_frame, transfer, transfer_attributes  # their arguments checked (issue #33)
 from .labelled_rig import LabelledRig
 from .landmarks.detect import detect_landmarks
 from .expressions.model import ExpressionModel

@@ -1,7 +1,7 @@
 """The public entry points whose own modules do not check their arguments (issue #33 item 8).
 
-``transfer``, ``transfer_attributes`` and ``detect_frame`` live in modules other developers own
-(``rig_transfer/``, ``orient.py``); their arguments are checked here, at the entry point
+``place``, ``transfer``, ``transfer_attributes`` and ``detect_frame`` live in modules other developers
+own (``placement/``, ``rig_transfer/``, ``orient.py``); their arguments are checked here, at the entry point
 ``autobones/__init__.py`` exports, with :mod:`autobones.arguments`, and the call then goes on
 unchanged. A wrong type is an :class:`AutobonesError` naming the argument (``rig=42``: "rig:
 expected ..."), never an ``AttributeError`` or ``UFuncTypeError`` from inside.
@@ -9,11 +9,13 @@ expected ..."), never an ``AttributeError`` or ``UFuncTypeError`` from inside.
 from __future__ import annotations
 
 import functools
+import numbers
 import os
 
 from .arguments import float_array, index_array
 from .errors import AutobonesError
 from .orient import detect_frame as _detect_frame
+from .placement.pipeline import place as _place
 from .rig_transfer.fields import transfer_attributes as _transfer_attributes
 from .rig_transfer.pipeline import transfer as _transfer
 
@@ -42,12 +44,23 @@ def _check_landmarks_argument(landmarks, name, optional=True):
 
 
 @functools.wraps(_transfer)
-def transfer(head, landmarks=None, rig=None, up=None, front=None, *args, **kwargs):
+def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, *args, **kwargs):
     _check_landmarks_argument(landmarks, "landmarks")
     _check_rig_argument(rig)
     _check_axis(up, "up")
     _check_axis(front, "front")
-    return _transfer(head, landmarks, rig, up, front, *args, **kwargs)
+    if isinstance(control_points, bool) or not isinstance(control_points, numbers.Integral) or control_points < 1:
+        raise AutobonesError(f"control_points: expected a whole number >= 1, not {control_points!r:.40}")
+    return _transfer(head, landmarks, rig, up, front, int(control_points), *args, **kwargs)
+
+
+@functools.wraps(_place)
+def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
+    _check_landmarks_argument(landmarks, "landmarks")
+    _check_rig_argument(rig)
+    _check_axis(up, "up")
+    _check_axis(front, "front")
+    return _place(mesh, density, up, front, random_state, landmarks, rig)
 
 
 @functools.wraps(_transfer_attributes)

@@ -524,4 +524,15 @@ def api_cases():
                                   "build_rig with landmarks x100: the unit check of transfer"),
         "labelled_rig_load_none": (lambda c: autobones.LabelledRig.load(None), "folder:", "LabelledRig.load(None)"),
         "save_path_none": (lambda c: c.rig.save(None), "path:", "rig.save(None)"),
+        "place_rig_42": (lambda c: autobones.place((c.V, c.F), landmarks=c.lm, rig=42), "rig:",
+                         "place(rig=42) (was: AttributeError)"),
+        "transfer_control_points_text": (lambda c: autobones.transfer((c.V, c.F), landmarks=c.lm, control_points="x"),
+                                         "control_points", "control_points='x' (was: TypeError)"),
+        "pose_arkit_list": (lambda c: c.rig.pose(arkit=[1.0]), "arkit:", "arkit weights as a list (was: "
+                            "AttributeError)"),
+        "skeleton_flat_heads": (lambda c: autobones.Skeleton(["a"], [-1], [[0.0, 0.0]], [[0.0, 0.0, 1.0]]), "heads",
+                                "a Skeleton with 2-D heads (was: a bare AssertionError)"),
+        "skeleton_parent_after_child": (lambda c: autobones.Skeleton(["a", "b"], [-1, 1], [[0.0] * 3] * 2,
+                                                                     [[0.0, 0.0, 1.0]] * 2), "parents",
+                                        "a bone that is its own parent"),
     }
