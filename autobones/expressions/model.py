@@ -493,5 +493,3 @@ class ExpressionModel:
             look_at = self.frame_.to_canonical(np.asarray(look_at, dtype=np.float64).reshape(1, 3))[0]
         moves = bone_transforms(self.bones_, self.pivots_, 0.0, gaze, look_at, head_deg, neck_deg)
         return blend_bones(d, V, self.jaw_weights_, moves)
-
-
