@@ -304,6 +304,11 @@ def _edit(rig, change):
     return ("edit", rig, change)
 
 
+def _nan_weights(arrays):
+    arrays["weights"] = arrays["weights"].copy()
+    arrays["weights"][3, 0] = np.nan
+
+
 def _set(path, value):
     """A change setting ``meta[k1][k2]...`` (``path`` a tuple of keys / indices) to ``value``."""
     def change(meta):
@@ -355,6 +360,8 @@ def tampered_cases(add):
         "pose --definitions with an AU's muscle weight \"lots\" (was: ValueError traceback)")
     add("sidecar_definitions_au_lots", pose_t, _edit("t", lambda m: lots(m["expressions"]["definitions"])),
         "expressions.definitions.action_units.12", "the definitions a transferred rig's sidecar keeps, the same edit")
+    add("npz_weights_nan", ["export", "{rig}", "-o", "{out}.usda"], ("npz", "r", _nan_weights), "npz weights hold 1 nan",
+        "a NaN skin weight in the rig's .weights.npz: load_rig refuses it, so no writer gets it")
     add("export_proc", ["export", "{rig}", "-o", "/proc/autobones-x.usda"], None, "cannot write in /proc",
         "export -o /proc/...: the temporary file cannot be made there (was: FileNotFoundError traceback)")
 
@@ -423,6 +430,12 @@ def write_command_case(folder, name, rig, transferred=None):
         meta = json.loads(side.read_text())
         text = what[2](meta)
         side.write_text(text if isinstance(text, str) else json.dumps(meta))
+    elif what and what[0] == "npz":  # the rig's weights file edited
+        npz = folder / f"{what[1]}.weights.npz"
+        with np.load(npz) as z:
+            arrays = {k: z[k] for k in z.files}
+        what[2](arrays)
+        np.savez_compressed(npz, **arrays)
     elif what and what[0] in ("sidecar", "glb"):  # the rig's own file replaced
         (folder / ("r.rig.json" if what[0] == "sidecar" else "r.glb")).write_bytes(what[1]())
     elif what and what[0] == "name":
