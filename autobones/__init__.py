@@ -20,12 +20,11 @@ if _util.find_spec(__name__ + ".generic_rig") is None:
 
 from .errors import AutobonesError
 from .io.mesh import load_mesh
-from .orient import Frame, detect_frame
-from .placement.pipeline import place
+from .orient import Frame
+# before .rig: placement's package imports the Rig as it loads (the order __init__ always had)
+from .api import detect_frame, place, transfer, transfer_attributes  # their arguments checked (issue #33)
 from .rig import Rig
 from .skeleton import Skeleton
-from .rig_transfer.pipeline import transfer
-from .rig_transfer.fields import transfer_attributes
 from .labelled_rig import LabelledRig
 from .landmarks.detect import detect_landmarks
 from .expressions.model import ExpressionModel
@@ -39,8 +38,12 @@ def build_rig(base, landmarks, **kwargs):
     from .io.landmarks import resolve_landmarks
     from .io.mesh import resolve_mesh
 
+    from .io.landmark_checks import validate_landmarks
+
     V, F, _ = resolve_mesh(base)
-    lm, _ = resolve_landmarks(landmarks)
+    lm, source = resolve_landmarks(landmarks)
+    # the unit and surface check transfer has (issue #33: landmarks in cm on a head in m built a rig 226 m off)
+    lm = validate_landmarks(lm, V, F, min_count=1, source=source)
     return _build(V, F, lm, **kwargs)
 
 __all__ = ["AutobonesError", "ExpressionModel", "Frame", "LabelledRig", "Rig", "Skeleton", "build_rig", "detect_frame", "detect_landmarks", "load_mesh", "load_rig",

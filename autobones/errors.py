@@ -1,8 +1,11 @@
 """The one exception type the library raises for problems a user can act on."""
 
 
-class AutobonesError(Exception):
+class AutobonesError(ValueError):
     """Bad input or an impossible request: the message says what and how to fix it.
+
+    A ``ValueError`` (issue #33), so code written ``except ValueError`` around the API keeps working;
+    the API raises it, naming the argument, for a wrong type, shape or value as well.
 
     The CLI prints the message as one line and exits with code 2; any other
     exception is a bug in autobones.

@@ -180,7 +180,9 @@ class LabelledRig:
     @classmethod
     def load(cls, folder):
         """Read a rig folder written by :meth:`save`; AutobonesError naming what is wrong."""
-        folder = os.fspath(folder)
+        from .arguments import path_argument
+
+        folder = path_argument(folder, "folder")
         if not os.path.isdir(folder):
             raise AutobonesError(f"{folder}: no such rig folder (expected a folder with {', '.join(FILES)})")
         missing = [f for f in FILES if not os.path.isfile(os.path.join(folder, f))]

@@ -256,8 +256,10 @@ class Rig:
     def arkit_offset(self, weights):
         """Sum of ``weight * target`` (n, 3) of the ARKit shapes ``weights`` (dict name -> float),
         or None when there are none; AutobonesError for a name the rig has no target for."""
-        if not weights:
+        if weights is None or (isinstance(weights, dict) and not weights):
             return None
+        if not isinstance(weights, dict):
+            raise AutobonesError(f"arkit: expected a dict shape name -> weight, not {type(weights).__name__}")
         targets = self.arkit_targets or {}
         if not targets:
             raise AutobonesError("this rig has no ARKit shapes; make it with autobones transfer HEAD --arkit "
@@ -320,7 +322,9 @@ class Rig:
             expression definitions in the sidecar (``expressions``), so a loaded rig
             poses any mix the same way.
         """
-        path = os.fspath(path)
+        from .arguments import path_argument
+
+        path = path_argument(path, "path")
         if not path.lower().endswith(".glb"):
             raise AutobonesError(f"{path}: the output must be a .glb file")
         json_path, npz_path = sidecar_paths(path)

@@ -27,13 +27,23 @@ class Skeleton:
     tails: np.ndarray
 
     def __post_init__(self):
-        self.parents = np.asarray(self.parents, dtype=np.int64)
-        self.heads = np.asarray(self.heads, dtype=np.float64)
-        self.tails = np.asarray(self.tails, dtype=np.float64)
+        # checked, not asserted: a public type (issue #33), and asserts vanish under python -O
+        from .arguments import float_array, index_array
+        from .errors import AutobonesError
+
+        if not isinstance(self.names, (list, tuple)) or not all(isinstance(n, str) for n in self.names):
+            raise AutobonesError("names: expected a list of bone names (str)")
         b = len(self.names)
-        assert len(set(self.names)) == b, "bone names must be unique"
-        assert self.parents.shape == (b,) and self.heads.shape == (b, 3) and self.tails.shape == (b, 3)
-        assert all(p < i for i, p in enumerate(self.parents)), "parents must come before children"
+        if len(set(self.names)) != b:
+            raise AutobonesError("names: bone names must be unique")
+        parents = np.asarray(self.parents)
+        if parents.dtype.kind not in "iuf" or parents.shape != (b,):
+            raise AutobonesError(f"parents: expected {b} bone indices (-1: a root), got {parents.dtype} {parents.shape}")
+        self.parents = index_array(parents + 1, "parents", (b,), b + 1) - 1  # -1..b-1, shifted to 0..b
+        self.heads = float_array(self.heads, "heads", (b, 3))
+        self.tails = float_array(self.tails, "tails", (b, 3))
+        if not all(p < i for i, p in enumerate(self.parents)):
+            raise AutobonesError("parents: each bone's parent must come before it (-1: a root)")
 
     def __len__(self):
         return len(self.names)

@@ -263,8 +263,9 @@ def command_cases():
         "a newline in the file name: the name is written as its repr, the message stays one line")
     add("sidecar_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("sidecar", lambda: b'{"format": ' + _deep() + b"}"),
         "nested 100001 levels", "the rig's sidecar nested 100k deep (was: RecursionError traceback)")
-    add("glb_json_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("glb", _deep_glb), "nested too deeply",
-        "the rig's glb with its JSON chunk nested 100k deep (was: RecursionError traceback)")
+    add("glb_json_deep", ["pose", "{rig}", "-o", "{out}.obj"], ("glb", _deep_glb), "nested 100000 levels deep",
+        "the rig's glb with its JSON chunk nested 100k deep: the depth scan of io/files.py runs on it too "
+        "(was: RecursionError traceback)")
     add("capture_dev_zero", animate, "/dev/zero", "device",
         "animate --capture /dev/zero: refused from stat (was: MemoryError traceback)")
     add("capture_fifo", animate, "fifo", "fifo", "a FIFO as the capture: refused, never opened (was: blocked forever)")
@@ -283,8 +284,9 @@ def command_cases():
         "a\\nb.obj", "a mesh whose name holds a newline (a message of io/mesh.py): the CLI writes each control "
         "character as its escape, so the line stays one")
     add("mesh_1e200_warnings", ["place", "{file}", "-o", "{out}.glb", "--density", "sparse"],
-        ("name", "big.obj", None), "outlier",
-        "the robot at x1e200: numpy's overflow RuntimeWarnings are held and dropped before the one-line error")
+        ("name", "big.obj", None), "coordinates reach",
+        "the robot at x1e200: refused by the scale check before numpy overflows (its RuntimeWarnings would be held "
+        "and dropped before the one-line error)")
     batch = ["batch", "{file}", "-o", "{out}", "--density", "sparse", "--force"]
     add("batch_output_subfolder_linked_into_input", batch, ("batch_link", "folder"), "inside the input folder",
         "batch IN -o OUT --force where OUT/sub links to IN/sub: every output resolved first, refused (was: rigs "
@@ -302,19 +304,123 @@ def command_cases():
         "a required option missing")
     add("no_command", [], None, "no command given", "autobones alone: one line on stderr, exit 2 (was: the help on "
         "stdout, exit 2); autobones --help prints the help, exit 0")
+    tampered_cases(add)
+    bad_value_cases(add)
     return out
 
 
-def write_command_case(folder, name, rig):
-    """Make command case ``name``'s files in ``folder`` (the rig ``rig`` copied in as r.glb and its
-    sidecars, the robot as head.obj) and return its argument list."""
+def _edit(rig, change):
+    """``("edit", rig, change)``: the sidecar of rig ``"r"`` (placed) or ``"t"`` (transferred, with ARKit
+    shapes) read as JSON, ``change(meta)`` applied (it edits the dict in place, or returns the new text)."""
+    return ("edit", rig, change)
+
+
+def _nan_weights(arrays):
+    arrays["weights"] = arrays["weights"].copy()
+    arrays["weights"][3, 0] = np.nan
+
+
+def _set(path, value):
+    """A change setting ``meta[k1][k2]...`` (``path`` a tuple of keys / indices) to ``value``."""
+    def change(meta):
+        node = meta
+        for k in path[:-1]:
+            node = node[k]
+        node[path[-1]] = value
+    return change
+
+
+def _definitions(change):
+    """The shipped definitions with ``change(doc)`` applied (in place, or returning the new text), as bytes."""
+    def make():
+        from autobones.generic_rig import expressions_path
+
+        doc = json.loads(Path(expressions_path()).read_text())
+        text = change(doc)
+        return (text if isinstance(text, str) else json.dumps(doc)).encode()
+    return make
+
+
+def tampered_cases(add):
+    """Issue #33 item 5: a rig's sidecar (or definitions) edited into a value autobones never writes.
+    Each was a traceback, an allocation of what the file claimed, or NaN; each is one line naming the key."""
+    pose_r = ["pose", "{rig}", "-o", "{out}.obj"]
+    pose_t = ["pose", "{trig}", "--au", "12=1", "-o", "{out}.obj"]
+    add("sidecar_labels_out_of_int8", pose_r, _edit("r", _set(("labels", 5), 300)), "labels holds 300",
+        "a label of 300 (int8 holds -128..127; the labels are 0..2): refused by the schema (was: OverflowError)")
+    add("sidecar_vertex_count_infinity", pose_r,
+        _edit("r", lambda m: json.dumps(m).replace(f'"vertex_count": {m["vertex_count"]}', '"vertex_count": Infinity')),
+        "non-finite number (infinity)", "vertex_count Infinity: the JSON reader refuses NaN and Infinity, which "
+        "autobones never writes (was: OverflowError traceback)")
+    add("sidecar_vertex_count_1e12", pose_r, _edit("r", _set(("vertex_count",), 10 ** 12)),
+        "vertex_count is 1000000000000", "vertex_count 10^12: refused before anything is allocated (was: an "
+        "attempt to allocate 931 GiB)")
+    add("sidecar_landmarks_list", pose_t, _edit("t", lambda m: m.update(landmarks=list(m["landmarks"].values()))),
+        "landmarks is a list", "landmarks as a list of points (was: AttributeError traceback)")
+    add("sidecar_muscles_string", pose_t, _edit("t", _set(("muscles",), "zygomaticus")), "muscles is the string",
+        "muscles as a string (was: TypeError traceback)")
+    add("sidecar_frame_2x2", pose_r, _edit("r", _set(("frame", "rotation"), [[1.0, 0.0], [0.0, 1.0]])),
+        "frame.rotation is a list of 2", "a 2x2 frame rotation (was: ValueError traceback from matmul)")
+    add("sidecar_head_size_0", pose_r, _edit("r", _set(("frame", "head_size"), 0)), "frame.head_size is 0",
+        "head_size 0 (every length is divided by it)")
+    add("sidecar_facial_mask_out_of_range", pose_r, _edit("r", _set(("facial_mask",), [10 ** 9])),
+        "facial_mask holds 1000000000", "a facial-mask index past the vertices (was: IndexError traceback)")
+    lots = _set(("action_units", "12", "muscles", "zygomaticus_major"), "lots")
+    add("definitions_au_lots", pose_t + ["--definitions", "{file}"], _definitions(lots),
+        "action_units.12.muscles.zygomaticus_major is the string 'lots'",
+        "pose --definitions with an AU's muscle weight \"lots\" (was: ValueError traceback)")
+    add("sidecar_definitions_au_lots", pose_t, _edit("t", lambda m: lots(m["expressions"]["definitions"])),
+        "expressions.definitions.action_units.12", "the definitions a transferred rig's sidecar keeps, the same edit")
+    add("npz_weights_nan", ["export", "{rig}", "-o", "{out}.usda"], ("npz", "r", _nan_weights), "npz weights hold 1 nan",
+        "a NaN skin weight in the rig's .weights.npz: load_rig refuses it, so no writer gets it")
+    add("export_proc", ["export", "{rig}", "-o", "/proc/autobones-x.usda"], None, "cannot write in /proc",
+        "export -o /proc/...: the temporary file cannot be made there (was: FileNotFoundError traceback)")
+
+
+def bad_value_cases(add):
+    """Issue #33 item 6: inputs that wrote infinities, NaN or collapsed triangles with exit 0: each refused
+    in one line naming the value (and the writers refuse anything non-finite as the last line of defence)."""
+    add("mesh_scale_1e150", ["place", "{file}", "-o", "{out}.glb", "--density", "sparse"],
+        ("name", "big.obj", 1e150), "coordinates reach 4.48e+150",
+        "the robot at x1e150: beyond 1e18, a glb's float32 positions would be -inf (was: written, exit 0)")
+    add("mesh_scale_1e-40", ["place", "{file}", "-o", "{out}.glb", "--density", "sparse"],
+        ("name", "tiny.obj", 1e-40), "4.1e-40 across",
+        "the robot at x1e-40: below 1e-18 across, every triangle has zero area in float32 (was: written, exit 0)")
+    add("pose_au_1e308", ["pose", "{trig}", "--au", "12=1e308", "-o", "{out}.glb"], None,
+        "au 12: 1e+308 is outside [-10, 10]",
+        "an AU at 1e308 (every position infinite): intensities within +-10 (1 is the unit's full action)")
+    add("capture_weight_1e308", ["animate", "{trig}", "-o", "{out}.glb", "--capture", "{file}"],
+        lambda: _capture(3).replace(b",52,0,", b",52,1e308,", 1), "'1e308' is outside [-1, 2]",
+        "a capture weight of 1e308 (infinite float32 keys): ARKit weights run 0..1, [-1, 2] accepted")
+    add("definitions_nan_smoothing", ["pose", "{trig}", "--au", "12=1", "-o", "{out}.obj", "--definitions", "{file}"],
+        _definitions(lambda d: json.dumps(d).replace('"smoothing": 0.012', '"smoothing": NaN')),
+        "non-finite number (nan)", "model.smoothing NaN (was: 2,941 NaN vertices written, exit 0)")
+    add("build_rig_centimetres", ["build-rig", "{head}", "--landmarks", "{file}", "-o", "{out}"],
+        ("name", "cm.landmarks.json", _scaled_landmarks(100.0)), "centimetres",
+        "build-rig with the robot's landmarks x100: the unit and surface check of transfer (was: a rig 226 m off)")
+
+
+def _scaled_landmarks(k):
+    doc = json.loads(ROBOT_LANDMARKS.read_text())
+    doc["landmarks"] = {n: [c * k for c in p] for n, p in doc["landmarks"].items()}
+    return json.dumps(doc).encode()
+
+
+def write_command_case(folder, name, rig, transferred=None):
+    """Make command case ``name``'s files in ``folder`` (the placed rig ``rig`` copied in as r.glb and its
+    sidecars, the ``transferred`` rig (with ARKit shapes) as t.glb, the robot as head.obj) and return its
+    argument list."""
     import shutil
 
     args, what, _ = command_cases()[name]
     folder = Path(folder)
-    rig = Path(rig)
-    for src in (rig, rig.with_name(rig.stem + ".rig.json"), rig.with_name(rig.stem + ".weights.npz")):
-        shutil.copy(src, folder / src.name.replace(rig.stem, "r", 1))
+    for stem, src_rig in (("r", rig), ("t", transferred)):
+        if src_rig is None:
+            continue
+        src_rig = Path(src_rig)
+        for src in (src_rig, src_rig.with_name(src_rig.stem + ".rig.json"),
+                    src_rig.with_name(src_rig.stem + ".weights.npz")):
+            shutil.copy(src, folder / src.name.replace(src_rig.stem, stem, 1))
     (folder / "head.obj").write_bytes(data(ROBOT).read_bytes())
     file = folder / "bad"
     if callable(what):  # made only when used: the captures take ~1 s to build
@@ -330,6 +436,17 @@ def write_command_case(folder, name, rig):
     elif what and what[0] == "sparse":
         with open(file, "wb") as fh:
             fh.truncate(what[1])
+    elif what and what[0] == "edit":  # the rig's sidecar edited
+        side = folder / f"{what[1]}.rig.json"
+        meta = json.loads(side.read_text())
+        text = what[2](meta)
+        side.write_text(text if isinstance(text, str) else json.dumps(meta))
+    elif what and what[0] == "npz":  # the rig's weights file edited
+        npz = folder / f"{what[1]}.weights.npz"
+        with np.load(npz) as z:
+            arrays = {k: z[k] for k in z.files}
+        what[2](arrays)
+        np.savez_compressed(npz, **arrays)
     elif what and what[0] in ("sidecar", "glb"):  # the rig's own file replaced
         (folder / ("r.rig.json" if what[0] == "sidecar" else "r.glb")).write_bytes(what[1]())
     elif what and what[0] == "batch_link":  # {file} is the input folder, {out} the output folder
@@ -344,12 +461,13 @@ def write_command_case(folder, name, rig):
             (folder / "out" / "sub" / "head.glb").symlink_to(file / "sub" / "head.obj")
     elif what and what[0] == "name":
         file = folder / what[1]
-        if what[2] is None:  # the robot at x1e200
+        if what[2] is None or isinstance(what[2], float):  # the robot at x1e200, or at the scale given
             V, F = robot()
-            file.write_bytes(obj_bytes(V * 1e200, F))
+            file.write_bytes(obj_bytes(V * (what[2] or 1e200), F))
         else:
             file.write_bytes(what[2])
-    return [a.format(rig=folder / "r.glb", head=folder / "head.obj", file=file, out=folder / "out") for a in args]
+    return [a.format(rig=folder / "r.glb", trig=folder / "t.glb", head=folder / "head.obj", file=file, out=folder / "out")
+            for a in args]
 
 
 def view_cases():
@@ -437,3 +555,71 @@ def crash_on_crash(input_path, output_path, options):
     if os.path.basename(input_path).startswith("crash."):
         os._exit(139)
     return rig_one(input_path, output_path, options)
+
+
+def api_cases():
+    """Issue #33 item 8: {name: (call, needle, why)}: ``call(ctx)`` calls a public entry point with a wrong
+    type, shape or value, and must raise AutobonesError (a ValueError) whose message contains ``needle``
+    (the argument's name). ``ctx``: ``V``, ``F`` (the robot), ``lm`` (its landmark dict), ``rig`` (its
+    transferred Rig) and ``defs`` (a copy of the shipped definitions)."""
+    import autobones
+
+    nan = float("nan")
+    inf = float("inf")
+
+    def smoothing_nan(c):
+        c.defs["model"]["smoothing"] = nan
+        return autobones.ExpressionModel(c.defs).fit(c.rig)
+
+    return {
+        "place_ragged_faces": (lambda c: autobones.place((c.V, [[0, 1, 2], [1, 2]])), "faces",
+                               "faces as a ragged list (was: ValueError from numpy, or silently truncated)"),
+        "place_fractional_faces": (lambda c: autobones.place((c.V, c.F + 0.5)), "whole vertex indices",
+                                   "faces of 0.5, 1.5...: refused, never cut to 0, 1 by astype"),
+        "place_text_vertices": (lambda c: autobones.place((c.V.astype(str), c.F)), "vertices",
+                                "vertices as strings"),
+        "transfer_landmarks_list": (lambda c: autobones.transfer((c.V, c.F), landmarks=list(c.lm.values())),
+                                    "landmarks", "landmarks as a list of points: no names to go by"),
+        "transfer_landmark_nan": (lambda c: autobones.transfer((c.V, c.F), landmarks={**c.lm, "vertex": [nan, 0, 0]}),
+                                  "vertex", "a landmark with a NaN coordinate"),
+        "transfer_rig_42": (lambda c: autobones.transfer((c.V, c.F), landmarks=c.lm, rig=42), "rig:",
+                            "rig=42 (was: AttributeError)"),
+        "load_rig_none": (lambda c: autobones.load_rig(None), "path:", "load_rig(None) (was: TypeError)"),
+        "load_mesh_number": (lambda c: autobones.load_mesh(3.5), "path:", "load_mesh(3.5) (was: TypeError)"),
+        "detect_frame_fractional_faces": (lambda c: autobones.detect_frame(c.V, c.F + 0.5), "F:",
+                                          "detect_frame with fractional faces (was: IndexError)"),
+        "detect_frame_flat_list": (lambda c: autobones.detect_frame([1.0, 2.0, 3.0], c.F), "V:",
+                                   "detect_frame with three numbers as V (was: IndexError)"),
+        "detect_frame_face_out_of_range": (lambda c: autobones.detect_frame(c.V, c.F + len(c.V)), "F:",
+                                           "face indices past the vertices"),
+        "pose_head_inf": (lambda c: c.rig.pose(head_deg=[inf, 0, 0]), "head_deg",
+                          "pose(head_deg=[inf, 0, 0]) (was: NaN vertices returned)"),
+        "pose_au_1e308": (lambda c: c.rig.pose(au={12: 1e308}), "au 12", "an AU at 1e308 (was: inf vertices)"),
+        "pose_au_list": (lambda c: c.rig.pose(au=[12]), "au:", "au as a list"),
+        "pose_gaze_shape": (lambda c: c.rig.pose(gaze=[1.0, 2.0, 3.0]), "gaze", "gaze of 3 angles"),
+        "pose_jaw_text": (lambda c: c.rig.pose(jaw_deg="wide"), "jaw_deg", "jaw_deg a string"),
+        "expression_model_fit_42": (lambda c: autobones.ExpressionModel().fit(42), "rig:",
+                                    "ExpressionModel().fit(42) (was: AttributeError)"),
+        "expression_model_definitions_42": (lambda c: autobones.ExpressionModel(42).fit(c.rig), "definitions",
+                                            "ExpressionModel(42)"),
+        "expression_model_nan_smoothing": (smoothing_nan, "model.smoothing is nan",
+                                           "definitions given as a dict with NaN smoothing (was: NaN vertices)"),
+        "build_rig_landmarks_list": (lambda c: autobones.build_rig((c.V, c.F), [[0.0, 0.0, 0.0]]), "landmarks",
+                                     "build_rig with a list of points"),
+        "build_rig_centimetres": (lambda c: autobones.build_rig((c.V, c.F), {k: [x * 100 for x in v]
+                                                                         for k, v in c.lm.items()}), "centimetres",
+                                  "build_rig with landmarks x100: the unit check of transfer"),
+        "labelled_rig_load_none": (lambda c: autobones.LabelledRig.load(None), "folder:", "LabelledRig.load(None)"),
+        "save_path_none": (lambda c: c.rig.save(None), "path:", "rig.save(None)"),
+        "place_rig_42": (lambda c: autobones.place((c.V, c.F), landmarks=c.lm, rig=42), "rig:",
+                         "place(rig=42) (was: AttributeError)"),
+        "transfer_control_points_text": (lambda c: autobones.transfer((c.V, c.F), landmarks=c.lm, control_points="x"),
+                                         "control_points", "control_points='x' (was: TypeError)"),
+        "pose_arkit_list": (lambda c: c.rig.pose(arkit=[1.0]), "arkit:", "arkit weights as a list (was: "
+                            "AttributeError)"),
+        "skeleton_flat_heads": (lambda c: autobones.Skeleton(["a"], [-1], [[0.0, 0.0]], [[0.0, 0.0, 1.0]]), "heads",
+                                "a Skeleton with 2-D heads (was: a bare AssertionError)"),
+        "skeleton_parent_after_child": (lambda c: autobones.Skeleton(["a", "b"], [-1, 1], [[0.0] * 3] * 2,
+                                                                     [[0.0, 0.0, 1.0]] * 2), "parents",
+                                        "a bone that is its own parent"),
+    }

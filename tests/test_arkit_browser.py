@@ -41,7 +41,7 @@ def test_threejs_sees_the_52_arkit_names_and_jaw_open_moves_by_the_glbs_displace
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         url = p.stdout.readline().strip()
-        assert re.fullmatch(r"http://127\.0\.0\.1:\d+/", url), (url, p.poll())
+        assert re.fullmatch(r"http://127\.0\.0\.1:\d+/[A-Za-z0-9_-]{22}/", url), (url, p.poll())
         page, errors = _open(browser, url)
         hook = "window.autobonesViewer"
         # GLTFLoader's morphTargetDictionary: exactly the AUs and ARKit's 52 names, each at its glb index

@@ -27,6 +27,18 @@ def placed_rig(tmp_path_factory):
     return folder / "robot.glb"
 
 
+@pytest.fixture(scope="module")
+def transferred_rig(tmp_path_factory):
+    """A saved transfer rig of the robot head with its ARKit shapes (~3 s): muscles, landmarks and the
+    definitions in its sidecar, for the tampered-sidecar, pose and animate cases."""
+    import autobones
+
+    folder = tmp_path_factory.mktemp("trig")
+    autobones.transfer(data(bad_inputs.ROBOT), landmarks=str(bad_inputs.ROBOT_LANDMARKS), arkit=True).save(
+        folder / "robot.glb")
+    return folder / "robot.glb"
+
+
 def _snapshot(folder):
     """Every entry under ``folder``: a regular file's SHA-256, else its type (a FIFO is never opened)."""
     out = {}
@@ -40,8 +52,8 @@ def _snapshot(folder):
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, name):
-    args = bad_inputs.write_command_case(tmp_path, name, placed_rig)
+def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, transferred_rig, name):
+    args = bad_inputs.write_command_case(tmp_path, name, placed_rig, transferred_rig)
     case = CASES[name][2]
     before = _snapshot(tmp_path)
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -223,3 +235,138 @@ def test_view_folder_lists_past_a_deep_sidecar_and_a_deep_glb(tmp_path, placed_r
     listing = {f["output"]: f for f in batch_listing(open_site(tmp_path))["files"]}
     assert sorted(listing) == ["deep_sidecar.glb", "good.glb"]
     assert listing["good.glb"]["viewable"] and not listing["deep_sidecar.glb"]["viewable"]
+
+
+def test_the_corpus_covers_items_5_and_6():
+    """Each tampered rig and bad value issue #33 items 5 and 6 name is a refused case with a reason."""
+    for name in ("sidecar_labels_out_of_int8", "sidecar_vertex_count_infinity", "sidecar_vertex_count_1e12",
+                 "sidecar_landmarks_list", "sidecar_muscles_string", "sidecar_frame_2x2", "sidecar_head_size_0",
+                 "definitions_au_lots", "sidecar_definitions_au_lots", "export_proc", "glb_json_deep",
+                 "mesh_scale_1e150", "mesh_scale_1e-40", "pose_au_1e308", "capture_weight_1e308",
+                 "definitions_nan_smoothing", "build_rig_centimetres"):
+        assert CASES[name][2].expect == "refused" and CASES[name][2].why, name
+
+
+# --------------------------------------------------------------------------------------------------
+# a full disk during a USD export; the writers' finiteness guard
+
+def _tiny_tmpfs(folder):
+    """``folder`` mounted as a 64 kB tmpfs (root only); False where mounting is not allowed."""
+    folder.mkdir()
+    try:
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(folder)], capture_output=True,
+                           timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return r.returncode == 0
+
+
+def test_a_full_disk_during_a_usd_export_is_one_line_and_leaves_nothing(tmp_path, transferred_rig, monkeypatch,
+                                                                       capsys):
+    """On a 64 kB tmpfs (where it can be mounted; else the writer made to fail with ENOSPC, as a full disk
+    does): one line, exit 2, no partial file (was: a traceback and 11,061 lines from the USD library)."""
+    import errno
+
+    full = tmp_path / "full"
+    mounted = _tiny_tmpfs(full)
+    try:
+        if mounted:
+            env = dict(os.environ, PYTHONPATH=str(ROOT))
+            for ext in (".usdc", ".usda"):
+                r = subprocess.run(CLI + ["export", str(transferred_rig), "-o", str(full / ("x" + ext))],
+                                   env=env, capture_output=True, text=True, timeout=120)
+                assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
+                assert r.stderr.count("\n") == 1 and "no space left on device" in r.stderr, r.stderr
+                assert os.listdir(full) == []
+        else:
+            from autobones.export import usd
+            from cli import main as cli_main
+
+            full.mkdir(exist_ok=True)
+
+            def disk_full(stage, tmp, out_path, ext):
+                with open(tmp, "wb") as fh:
+                    fh.write(b"PXR-USDC" + b"\0" * 100)  # a partial file, then the disk is full
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+            monkeypatch.setattr(usd, "_export", disk_full)
+            code = cli_main.main(["export", str(transferred_rig), "-o", str(full / "x.usdc")])
+            err = capsys.readouterr().err
+            assert code == 2 and err.count("\n") == 1 and "no space left on device" in err.lower(), err
+            assert os.listdir(full) == []
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(full)], timeout=30)
+
+
+def test_the_writers_never_write_a_non_finite_value(tmp_path):
+    """glb (rig, posed mesh, animation keys), OBJ and USD refuse NaN and infinity (a finite 1e300 is
+    infinite in float32) and write nothing: the last line of defence behind every input check."""
+    import numpy as np
+
+    from autobones.errors import AutobonesError
+    from autobones.io.gltf import add_animation, glb_bytes
+    from autobones.io.obj import write_obj
+    from autobones.io.posed import write_posed_mesh
+
+    V, F = bad_inputs.robot()
+    for bad in (np.nan, np.inf, 1e300):
+        W = V.copy()
+        W[7, 1] = bad
+        for name in ("x.obj", "x.glb") if bad != 1e300 else ("x.glb",):  # an OBJ keeps float64's 1e300
+            with pytest.raises(AutobonesError, match=r"not written: 1 NaN or infinite values"):
+                write_posed_mesh(tmp_path / name, W, F)
+        with pytest.raises(AutobonesError, match="positions"):
+            glb_bytes(W, F)
+        with pytest.raises(AutobonesError, match="morph target smile"):
+            glb_bytes(V, F, morph_targets=[("smile", W - V)])
+    with pytest.raises(AutobonesError, match="vertices"):
+        W = V.copy()
+        W[0, 0] = np.nan
+        write_obj(tmp_path / "y.obj", W, F)
+    assert os.listdir(tmp_path) == []
+    with pytest.raises(AutobonesError, match="weights keys"):
+        add_animation({}, b"", "a", [0.0, 1.0], [(0, "weights", [[0.0], [1e300]])])
+
+
+def test_usd_stage_refuses_non_finite_points(transferred_rig):
+    import numpy as np
+
+    from autobones.errors import AutobonesError
+    from autobones.export import usd
+
+    src = usd.read_rig_source(transferred_rig)
+    src.rig.vertices = np.array(src.rig.vertices)
+    src.rig.vertices[3, 2] = 1e300  # finite in float64, infinite in USD's float32 points
+    with pytest.raises(AutobonesError, match="points"):
+        usd.build_stage(src)
+
+
+def test_schema_refuses_what_autobones_never_writes(placed_rig):
+    """rig_schema on its own: the sidecar autobones wrote passes; each edit is named by its key."""
+    from autobones.io.rig_schema import SchemaError, check_definitions, check_sidecar
+    from autobones.expressions.definitions import MODEL_DEFAULTS
+    from autobones.generic_rig import expressions_path
+
+    meta = json.loads(placed_rig.with_name("robot.rig.json").read_text())
+    assert check_sidecar(meta, MODEL_DEFAULTS) == meta["vertex_count"]
+    for path, value, needle in ((("bones", 0, "head"), [0, 0], r"bones\[0\].head is a list of 2"),
+                                (("bones", 1, "parent"), "nobody", "not a bone listed before it"),
+                                (("labels", 0), -1, "labels holds -1"),
+                                (("labels", 0), 1.5, "labels holds 1.5"),
+                                (("frame", "rotation", 0, 0), -1.0, "not a rotation"),
+                                (("frame", "origin"), "here", "frame.origin is the string"),
+                                (("vertex_count",), True, "vertex_count is true"),
+                                (("reliable_fraction",), 2.0, r"reliable_fraction is 2, expected a number in \[0, 1\]")):
+        edited = json.loads(json.dumps(meta))
+        node = edited
+        for k in path[:-1]:
+            node = node[k]
+        node[path[-1]] = value
+        with pytest.raises(SchemaError, match=needle):
+            check_sidecar(edited, MODEL_DEFAULTS)
+    defs = json.loads(open(expressions_path()).read())
+    check_definitions(defs, MODEL_DEFAULTS)
+    defs["model"]["smoothing"] = float("nan")  # a dict through the API never passed the JSON reader
+    with pytest.raises(SchemaError, match="definitions.model.smoothing is nan"):
+        check_definitions(defs, MODEL_DEFAULTS)

@@ -45,6 +45,13 @@ class Capture:
     source: str
 
 
+
+# What a take may hold (issue #33 item 6: weights of 1e308 became infinite animation keys). ARKit's
+# shape weights run 0..1; one unit of slack either way keeps a retargeted or exaggerated take. The
+# angles are radians: at most a full turn either way.
+WEIGHT_RANGE = (-1.0, 2.0)
+ANGLE_RANGE = (-2 * math.pi, 2 * math.pi)
+
 def parse_time(text, fps):
     """Seconds of a Live Link Face timecode ``HH:MM:SS:FF.fff`` (or a plain frame number) at ``fps``."""
     m = _TIMECODE.match(text)
@@ -123,6 +130,10 @@ def read_capture(path, fps=60.0):
                 v = float("nan")
             if not math.isfinite(v):
                 raise AutobonesError(f"{path}: line {line}: column {cols[j]}: {text!r} is not a finite number")
+            low, high = ANGLE_RANGE if cols[j] in CAPTURE_ANGLES else WEIGHT_RANGE
+            if not low <= v <= high:  # 1e308 is finite, and infinite in the glb's float32 keys
+                raise AutobonesError(f"{path}: line {line}: column {cols[j]}: {text[:24]!r} is outside [{low:g}, "
+                                     f"{high:g}] ({'radians' if cols[j] in CAPTURE_ANGLES else 'a shape weight'})")
             values[i, j] = v
     T = np.asarray(times)
     return Capture(times=T - T[0], source=os.path.basename(path),

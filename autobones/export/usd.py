@@ -37,11 +37,13 @@ from __future__ import annotations
 
 import math
 import os
+import contextlib
 import tempfile
 
 import numpy as np
 
 from ..errors import AutobonesError
+from ..arguments import finite_output
 from ..io.atomic import check_destination, refuse_overwriting_inputs, replace_all, temp_beside
 from . import USD_SUFFIXES
 from .source import read_rig_source
@@ -248,8 +250,18 @@ def build_stage(src, meters_per_unit=None, max_influences=None):
     skel.CreateRestTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.local]))
 
     mesh = UsdGeom.Mesh.Define(stage, "/Rig/Mesh")
-    V = np.asarray(rig.vertices, dtype=np.float32)
     F = np.asarray(rig.faces, dtype=np.int32)
+    # the last line of defence (issue #33): nothing non-finite reaches the stage, whatever the rig holds; a
+    # value past float32's range is named by the check, not warned of by numpy
+    with np.errstate(over="ignore"):
+        V = np.asarray(rig.vertices, dtype=np.float32)
+        finite_output(None, "the USD stage", ("points (float32)", V),
+                      *((f"blend shape {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in src.morph_targets),
+                      *((f"animation {a.name}", x) for a in src.animations
+                        for x in (a.times, a.translations, a.rotations, a.scales)
+                        if x is not None),
+                      *((f"animation {a.name} weights (float32)", np.asarray(a.morph_weights, dtype=np.float32))
+                        for a in src.animations if a.morph_weights is not None))
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(V)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(F), 3, dtype=np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(F.ravel())))
@@ -394,6 +406,43 @@ def validate_stage(stage_or_path):
     return out
 
 
+def _export(stage, tmp, out_path, ext):
+    """Write ``stage`` to the temporary ``tmp`` (``out_path``'s format)."""
+    if ext == ".usdz":
+        from pxr import UsdUtils
+
+        with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
+            inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
+            if not stage.GetRootLayer().Export(inner):
+                raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+            os.remove(tmp)  # the packager refuses to replace a file
+            if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
+                raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
+    elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
+        raise AutobonesError(f"{out_path}: usd-core could not write the stage")
+
+
+@contextlib.contextmanager
+def usd_errors(out_path):
+    """USD's errors while writing ``out_path`` as one AutobonesError line. Without a ``Tf.Error.Mark``
+    usd-core prints each error itself (a full disk: thousands of lines as the check then read the
+    truncated file) and carries on; under one, the first error raises ``Tf.ErrorException`` here."""
+    from pxr import Tf
+
+    mark = Tf.Error.Mark()
+    mark.SetMark()
+    try:
+        yield
+    except Tf.ErrorException as exc:
+        text = " ".join(str(exc).split())
+        why = "no space left on device" if "No space left" in text else text.split(" : ")[-1][:160] or "an error"
+        raise AutobonesError(f"{out_path}: usd-core could not write it ({why.strip(chr(39))})") from None
+    except OSError as exc:
+        raise AutobonesError(f"{out_path}: cannot write the USD file ({exc.strerror or exc})") from None
+    finally:
+        mark.Clear()
+
+
 def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     """Write the rig saved as ``rig_path`` to ``out_path`` as a UsdSkel stage (see the module doc).
 
@@ -433,21 +482,11 @@ def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     fd, tmp = temp_beside(out_path, suffix=ext)
     os.close(fd)
     try:
-        if ext == ".usdz":
-            from pxr import UsdUtils
-
-            with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
-                inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
-                if not stage.GetRootLayer().Export(inner):
-                    raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-                os.remove(tmp)  # the packager refuses to replace a file
-                if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
-                    raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
-        elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
-            raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-        findings = validate_stage(tmp)
+        with usd_errors(out_path):
+            _export(stage, tmp, out_path, ext)
+            findings = validate_stage(tmp)
         replace_all([(tmp, out_path)], "the USD file")
-    finally:
+    finally:  # a partial file (a full disk) never stays
         if os.path.exists(tmp):
             os.remove(tmp)
     rig = src.rig

@@ -12,7 +12,8 @@ import copy
 import os
 
 from ..errors import AutobonesError
-from ..io.files import read_json
+from ..io.files import read_json, shown
+from ..io.rig_schema import SchemaError, check_definitions, finite_float, no_constants
 
 # The fallbacks used when a definitions file lacks an optional ``model`` key: the values the
 # model used before the key existed, so an older user file poses as it did. The shipped
@@ -72,15 +73,21 @@ def load_expressions(path=None):
         from ..generic_rig import expressions_path
 
         path = expressions_path()
-    if isinstance(path, dict):
+    if isinstance(path, dict):  # the API's own dict, or a sidecar's: checked as a file is
+        try:
+            check_definitions(path, MODEL_DEFAULTS)
+        except SchemaError as exc:
+            raise AutobonesError(f"expression definitions: {exc}") from None
         return path
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise AutobonesError(f"definitions: expected a path, a dict or None, not {type(path).__name__}")
     path = os.fspath(path)
+    doc = read_json(path, "definitions", invalid="cannot read the expression definitions",  # bounded
+                    parse_constant=no_constants, parse_float=finite_float)
     try:
-        doc = read_json(path, "definitions", invalid="cannot read the expression definitions")  # bounded
-        for key in ("model", "muscle_types", "action_units", "expressions"):
-            doc[key]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise AutobonesError(f"{path}: cannot read the expression definitions ({exc})") from None
+        check_definitions(doc, MODEL_DEFAULTS)
+    except SchemaError as exc:
+        raise AutobonesError(f"{shown(path)}: cannot read the expression definitions ({exc})") from None
     return doc
 
 

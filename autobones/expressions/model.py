@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..arguments import MAX_ANGLE, float_array, intensity_mixes, pose_angles, real
 from ..errors import AutobonesError
 from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
@@ -150,6 +151,10 @@ class ExpressionModel:
     def fit(self, rig):
         """Build the skin, wires, locators, constraints, creases, lids and jaw weights on ``rig``
         (a transferred :class:`autobones.rig.Rig`, or any object with its attributes)."""
+        missing = [a for a in ("vertices", "faces", "frame", "skeleton", "weights") if not hasattr(rig, a)]
+        if missing:  # rig=42: one line naming the argument, not an AttributeError inside
+            raise AutobonesError(f"rig: expected an autobones Rig (autobones.transfer or load_rig), not "
+                                 f"{type(rig).__name__} (it has no {missing[0]})")
         self.doc_ = load_expressions(self.definitions)
         p = self.params_ = model_parameters(self.doc_)
         types = muscle_types(self.doc_)
@@ -261,9 +266,10 @@ class ExpressionModel:
             ``eyelids`` (4,) float in :data:`LIDS` order.
         """
         self._check()
+        au, expression, muscles, eyelids = intensity_mixes(au, expression, muscles, eyelids)
         c = np.zeros(len(self.muscle_names_))
         lids = np.zeros(4)
-        jaw = float(jaw_deg)
+        jaw = real(jaw_deg, "jaw_deg", -MAX_ANGLE / 2, MAX_ANGLE / 2)  # a jaw opens less than a right angle
         mix = {}
         if expression is not None:
             ex = {expression: 1.0} if isinstance(expression, str) else dict(expression)
@@ -409,7 +415,9 @@ class ExpressionModel:
             Vertices in the input frame and units.
         """
         self._check()
-        c = np.asarray(contractions, dtype=np.float64).reshape(-1)
+        gaze, look_at, head_deg, neck_deg = pose_angles(gaze, look_at, head_deg, neck_deg)
+        c = float_array(np.reshape(contractions, -1) if np.ndim(contractions) else contractions, "contractions",
+                        (None,))
         if c.shape != (len(self.muscle_names_),):
             raise AutobonesError(f"contractions: expected {len(self.muscle_names_)} values, got {c.shape}")
         Vc = self.canonical_
@@ -485,4 +493,3 @@ class ExpressionModel:
             look_at = self.frame_.to_canonical(np.asarray(look_at, dtype=np.float64).reshape(1, 3))[0]
         moves = bone_transforms(self.bones_, self.pivots_, 0.0, gaze, look_at, head_deg, neck_deg)
         return blend_bones(d, V, self.jaw_weights_, moves)
-

@@ -27,7 +27,10 @@ def temp_beside(path, suffix=".tmp"):
     the renamed output is not owner-only.
     """
     folder = os.path.dirname(os.path.abspath(os.fspath(path)))
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(os.fspath(path)) + "-", suffix=suffix, dir=folder)
+    try:  # a folder that takes no new files (/proc, read-only, full): one line naming the output
+        fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(os.fspath(path)) + "-", suffix=suffix, dir=folder)
+    except OSError as exc:
+        raise AutobonesError(f"{os.fspath(path)}: cannot write in {folder} ({exc.strerror or exc})") from None
     os.fchmod(fd, _default_mode())
     return fd, tmp
 

@@ -254,7 +254,7 @@ def _add_morph_targets(buf, mesh, morph_targets, V):
         mesh["extras"] = {"targetNames": target_names}
 
 
-def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
+def glb_bytes(V, F, skin=None, extras=None, morph_targets=(), path=None):
     """The .glb file of one triangle mesh, skinned when ``skin`` is given, as bytes.
 
     Parameters
@@ -269,8 +269,19 @@ def glb_bytes(V, F, skin=None, extras=None, morph_targets=()):
         JSON-serialisable data stored in the asset's ``extras``.
     morph_targets : sequence of (name, (n, 3) float)
         See :func:`write_glb`.
+    path : str or None
+        The file the bytes are for, named in the message when a value is not finite.
+
+    AutobonesError when a position, a morph target or a bind matrix is NaN or infinite in float32
+    (a finite 1e300 is infinite there): nothing non-finite is ever written.
     """
-    V = np.asarray(V, dtype=np.float32)
+    from ..arguments import finite_output
+
+    with np.errstate(over="ignore"):  # a value past float32's range is named by the check below, not warned of
+        V = np.asarray(V, dtype=np.float32)
+        finite_output(path, "the glb", ("positions (float32)", V),
+                      *((f"morph target {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in morph_targets),
+                      *(() if skin is None else (("inverse bind matrices", skin.inverse_binds),)))
     F = np.asarray(F, dtype=np.uint32)
     buf = GlbBuffer()
     attributes = {"POSITION": buf.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)}
@@ -333,7 +344,7 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         frame's own x, y, z (right for a head stored +Y up, facing +Z).
     """
     data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers, axes), extras=extras,
-                     morph_targets=morph_targets)
+                     morph_targets=morph_targets, path=path)
     with open(path, "wb") as fh:
         fh.write(data)
 
@@ -369,13 +380,25 @@ def read_glb(path):
         if len(chunk) != length:
             raise ValueError("the file is truncated")
         if kind == b"JSON":
-            doc = json.loads(chunk)
+            doc = _json_chunk(chunk)
         elif kind == b"BIN\0":
             body = chunk
         off += 8 + length
     if not isinstance(doc, dict):
         raise ValueError("no JSON chunk")
     return doc, body
+
+
+def _json_chunk(chunk):
+    """The glb's JSON chunk parsed, after the depth scan every other JSON autobones reads has
+    (``io/files.py``): nested 100k deep, ``json.loads`` would end in a RecursionError."""
+    from .files import MAX_JSON_DEPTH, json_depth
+
+    depth = json_depth(chunk)
+    if depth > MAX_JSON_DEPTH:
+        raise ValueError(f"its JSON chunk is nested {depth} levels deep, more than the {MAX_JSON_DEPTH} autobones "
+                         "reads: a damaged file")
+    return json.loads(chunk)
 
 
 def read_accessor(doc, body, index):
@@ -420,8 +443,13 @@ def add_animation(doc, body, name, times, channels):
     inp = buf.add(t, FLOAT, "SCALAR")
     buf.accessors[inp]["min"], buf.accessors[inp]["max"] = [float(t.min())], [float(t.max())]
     samplers, chans = [], []
+    from ..arguments import finite_output
+
+    finite_output(None, "the animation", ("key times (float32)", t))
     for node, path, values in channels:
-        values = np.asarray(values, dtype=np.float32)
+        with np.errstate(over="ignore"):  # named by the check below
+            values = np.asarray(values, dtype=np.float32)
+        finite_output(None, "the animation", (f"{path} keys of node {node} (float32)", values))
         if len(values) != len(t):
             raise ValueError(f"animation channel {path} of node {node}: {len(values)} keys for {len(t)} times")
         atype = {"weights": "SCALAR", "rotation": "VEC4", "translation": "VEC3"}[path]

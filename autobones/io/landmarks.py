@@ -386,7 +386,22 @@ def resolve_landmarks(landmarks):
     """
     if isinstance(landmarks, (str, bytes, os.PathLike)):
         return read_landmarks(landmarks), os.fsdecode(landmarks)
-    return {k: np.asarray(v, dtype=np.float64) for k, v in dict(landmarks).items()}, "landmarks"
+    from collections.abc import Mapping
+
+    if not isinstance(landmarks, Mapping):  # a list of points has no names to go by
+        raise AutobonesError(f"landmarks: expected a file path or a dict name -> (x, y, z), not "
+                             f"{type(landmarks).__name__}")
+    out = {}
+    for k, v in landmarks.items():
+        try:
+            p = np.asarray(v, dtype=np.float64)
+        except (TypeError, ValueError):
+            p = None
+        if not isinstance(k, str) or p is None or p.shape != (3,) or not np.isfinite(p).all():
+            raise AutobonesError(f"landmarks: {str(k)[:40]!r} must be a name with 3 finite numbers, got "
+                                 f"{str(v)[:40]!r}")
+        out[k] = p
+    return out, "landmarks"
 
 
 def _json_number(x):

@@ -54,7 +54,9 @@ def load_mesh(path, strays=False):
         infinite coordinates; face indices out of range; a flat or tiny mesh; an
         outlier far from the rest (:data:`OUTLIER_REACH`); faces of (almost) zero area.
     """
-    path = os.fspath(path)
+    from ..arguments import path_argument
+
+    path = path_argument(path, "path")
     name = os.path.basename(path)
     if not os.path.isfile(path):
         raise AutobonesError(f"{path}: no such file")
@@ -151,14 +153,19 @@ def check_mesh(V, F, name="mesh", strays=False):
     """Validate plain arrays and return them as ``(float64 (n,3), int64 (m,3))``; AutobonesError
     naming ``name`` for anything :func:`load_mesh` refuses after parsing. ``strays``: small parts
     far from the head (:func:`stray_parts`) are left out of the outlier test (the caller drops them)."""
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F)
+    V, F = _as_arrays(V, F, name)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
         raise AutobonesError(f"{name}: no vertices found; is this a mesh file?")
     if F.size == 0:
         raise AutobonesError(f"{name}: {len(V)} vertices but no faces; a point cloud cannot be rigged")
     if F.ndim != 2 or F.shape[1] != 3:
         raise AutobonesError(f"{name}: faces must be triangles, got shape {F.shape}")
+    if not np.issubdtype(F.dtype, np.integer):  # 1.5 would be cut to 1 by astype: a silently different mesh
+        if not (np.issubdtype(F.dtype, np.floating) and np.isfinite(F).all() and (F == np.round(F)).all()):
+            raise AutobonesError(f"{name}: faces must be whole vertex indices, got {F.dtype} values such as "
+                                 f"{float(F.ravel()[np.argmax(F.ravel() != np.round(F.ravel()))])!r}")
+        if np.abs(F).max() >= 2 ** 53:
+            raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}), file is corrupt")
     F = F.astype(np.int64)
     bad = ~np.isfinite(V).all(axis=1)
     if bad.any():
@@ -172,12 +179,54 @@ def check_mesh(V, F, name="mesh", strays=False):
     if strays:
         body = stray_parts(V, F)
         used = used if body is None else np.intersect1d(used, body.index, assume_unique=True)
+    _check_scale(V[used], name)
     _check_outliers(V, used, name)
     extent = V[used].max(axis=0) - V[used].min(axis=0)
     if extent.max() <= 0 or extent.min() < 1e-4 * extent.max():
         raise AutobonesError(f"{name}: the mesh is flat (extent {extent.tolist()}); a head has volume")
     _check_area(V, F, extent, name)
     return V, F
+
+
+def _as_arrays(V, F, name):
+    """``V`` float64 and ``F`` as numpy arrays; AutobonesError naming ``name`` for ragged lists
+    (rows of different lengths) or values that are not numbers."""
+    try:
+        kind = np.asarray(V).dtype.kind
+        V = np.asarray(V, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise AutobonesError(f"{name}: the vertices are not an (n, 3) array of numbers ({str(exc)[:80]})") from None
+    if kind in "USb":  # numpy would parse "0.5" and take True as 1: text or truth values are not coordinates
+        raise AutobonesError(f"{name}: the vertices are not an (n, 3) array of numbers (dtype {kind!r})")
+    try:
+        F = np.asarray(F)
+    except ValueError as exc:  # numpy refuses ragged nested lists
+        raise AutobonesError(f"{name}: the faces are not an (m, 3) array of indices ({str(exc)[:80]})") from None
+    if F.dtype == object or F.dtype.kind in "USb":
+        raise AutobonesError(f"{name}: faces must be whole vertex indices, got {F.dtype} values")
+    return V, F
+
+
+# What the outputs can hold: a glb stores float32 positions (largest 3.4e38, smallest normal 1.2e-38),
+# and the pipeline squares lengths. A head whose coordinates reach past MAX_COORDINATE, or which is
+# smaller across than MIN_SIZE, would be written as infinities or as zero-area triangles (issue #33:
+# x1e150 gave -inf positions, x1e-40 zero-area triangles, both with exit 0): refused, with the scale
+# that brings it into range.
+MAX_COORDINATE = 1e18
+MIN_SIZE = 1e-18
+
+
+def _check_scale(U, name):
+    big = float(np.abs(U).max())
+    if big > MAX_COORDINATE:
+        raise AutobonesError(f"{name}: coordinates reach {big:.3g}, beyond the {MAX_COORDINATE:.0e} autobones "
+                             "writes (a glb's float32 positions would be infinite); scale the mesh to its real "
+                             "units (metres, centimetres) first")
+    size = float(np.linalg.norm(U.max(axis=0) - U.min(axis=0)))  # after: at 1e200 its square overflows
+    if 0 < size < MIN_SIZE:
+        raise AutobonesError(f"{name}: the mesh is {size:.3g} across, below the {MIN_SIZE:.0e} autobones writes (a "
+                             "glb's float32 positions would collapse its triangles to zero area); scale the mesh "
+                             "to its real units (metres, centimetres) first")
 
 
 # A few vertices far outside the rest (a stray vertex, a spike triangle, a part at 1e9) set the

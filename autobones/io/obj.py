@@ -155,6 +155,9 @@ def write_obj(path, V, F, comment=None):
     comment : str, optional
         One ``# comment`` line written first.
     """
+    from ..arguments import finite_output
+
+    finite_output(path, "the OBJ", ("vertices", np.asarray(V, dtype=np.float64)))
     with open(path, "w", encoding="ascii") as fh:
         if comment is not None:
             fh.write(f"# {comment}\n")

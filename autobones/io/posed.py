@@ -10,6 +10,7 @@ import os
 
 import numpy as np
 
+from ..arguments import finite_output
 from ..errors import AutobonesError
 from .atomic import output_folder, write_bytes_atomic
 from .gltf import glb_bytes
@@ -43,6 +44,7 @@ def write_posed_mesh(path, V, F, comment=None):
     output_folder(path)
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
+    finite_output(path, "the posed mesh", ("vertices", V))  # the last line of defence: no NaN, no inf written
     if ext == ".obj":
         buf = io.StringIO()
         if comment:
@@ -51,6 +53,6 @@ def write_posed_mesh(path, V, F, comment=None):
         np.savetxt(buf, F + 1, fmt="f %d %d %d")
         data = buf.getvalue().encode()
     else:
-        data = glb_bytes(V, F)  # the rig's container writer, minus the skin
+        data = glb_bytes(V, F, path=path)  # the rig's container writer, minus the skin
     write_bytes_atomic(path, data, "the posed mesh")
     return path

@@ -14,8 +14,11 @@ import zipfile
 
 import numpy as np
 
+from ..arguments import path_argument
 from ..errors import AutobonesError
-from .files import read_json
+from ..expressions.definitions import MODEL_DEFAULTS
+from .files import read_json, shown
+from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
 from .gltf import read_accessor, read_glb
 from ..orient import Frame
 from ..rig import SIDECAR_FORMAT, Rig, sidecar_attributes, sidecar_paths
@@ -61,7 +64,7 @@ def load_rig(path):
     >>> rig = autobones.load_rig("head.glb")
     >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
     """
-    path = os.fspath(path)
+    path = path_argument(path, "path")  # load_rig(None): one line naming the argument, not a TypeError
     doc, body = _read_autobones_glb(path)
     json_path, npz_path = sidecar_paths(path)
     for side in (json_path, npz_path):
@@ -134,30 +137,26 @@ def _read_autobones_glb(path):
 
 
 def _read_sidecar(json_path):
-    """The ``.rig.json`` sidecar: (its dict, Skeleton, Frame, labels (n,) int8, facial mask (n,) bool)."""
+    """The ``.rig.json`` sidecar: (its dict, Skeleton, Frame, labels (n,) int8, facial mask (n,) bool).
+    Every value is checked by :mod:`autobones.io.rig_schema` before it is used: a tampered sidecar is
+    one line naming its key, never a traceback or an allocation of what it claims."""
+    meta = read_json(json_path, "sidecar", invalid="not a readable autobones sidecar",  # bounded, depth checked
+                     parse_constant=no_constants, parse_float=finite_float)
     try:
-        meta = read_json(json_path, "sidecar", invalid="not a readable autobones sidecar")  # bounded, depth checked
         if not isinstance(meta, dict) or meta.get("format") != SIDECAR_FORMAT:
-            raise ValueError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
-                             f"expected {SIDECAR_FORMAT!r}")
-        n = int(meta["vertex_count"])
-        bones = meta["bones"]
-        names = [str(b["name"]) for b in bones]
-        skeleton = Skeleton(names, [names.index(b["parent"]) if b["parent"] is not None else -1 for b in bones],
-                            [b["head"] for b in bones], [b["tail"] for b in bones])
-        frame = Frame.from_dict(meta["frame"])
-        defs = (meta.get("expressions") or {}).get("definitions")
-        if defs is not None:
-            if not isinstance(defs, dict):
-                raise ValueError("expressions.definitions is not an object")
-            for key in ("model", "muscle_types", "action_units", "expressions"):
-                if not isinstance(defs.get(key), dict):
-                    raise ValueError(f"expressions.definitions has no {key!r}")
-        labels = np.asarray(meta["labels"], dtype=np.int8)
-        mask = np.zeros(n, dtype=bool)
-        mask[np.asarray(meta.get("facial_mask", []), dtype=np.int64)] = True
-    except (OSError, ValueError, KeyError, TypeError, IndexError, AssertionError) as exc:
-        raise AutobonesError(f"{json_path}: not a readable autobones sidecar ({type(exc).__name__}: {exc})") from None
+            raise SchemaError(f"format {meta.get('format') if isinstance(meta, dict) else None!r}, "
+                              f"expected {SIDECAR_FORMAT!r}")
+        n = check_sidecar(meta, MODEL_DEFAULTS)
+    except SchemaError as exc:
+        raise AutobonesError(f"{shown(json_path)}: not a readable autobones sidecar ({exc})") from None
+    bones = meta["bones"]
+    names = [b["name"] for b in bones]
+    skeleton = Skeleton(names, [names.index(b["parent"]) if b["parent"] is not None else -1 for b in bones],
+                        [b["head"] for b in bones], [b["tail"] for b in bones])
+    frame = Frame.from_dict(meta["frame"])
+    labels = np.asarray(meta["labels"], dtype=np.int8)  # within label_names: checked
+    mask = np.zeros(n, dtype=bool)
+    mask[np.asarray(meta.get("facial_mask", []), dtype=np.int64)] = True
     return meta, skeleton, frame, labels, mask
 
 
@@ -174,6 +173,9 @@ def _check_together(path, n, P, V, F, W, labels, names, saved_names):
                         f"{', '.join(saved_names[:3])}...) do not match the sidecar's {len(names)} bones")
     if len(F) and (F.min() < 0 or F.max() >= len(P)):
         problems.append("triangle indices out of range")
+    for what, a in (("glb positions", P), ("npz vertices", V), ("npz weights", W)):
+        if not np.isfinite(a).all():
+            problems.append(f"the {what} hold {int((~np.isfinite(a)).sum())} NaN or infinite values")
     if problems:
         raise AutobonesError(f"{path}: the glb and its sidecars do not belong together: {'; '.join(problems)} "
                              "(save the rig again)")

@@ -120,6 +120,8 @@ def load_muscle_definitions(path=None):
     try:
         doc = read_json(path, "rig", "muscle definitions")
         return list(doc["muscles"])
+    except AutobonesError:  # read_json's own message, naming the file
+        raise
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise AutobonesError(f"{path}: cannot read the muscle definitions ({exc})") from None
 
