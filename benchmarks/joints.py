@@ -4,8 +4,9 @@
     python benchmarks/joints.py --heads human_man,james --variants as-is --markdown
 
 Heads: every landmarked head ``benchmarks/zoo.py`` knows (``../shared/data``'s zoo, james, template, ICT
-identities 000-002, the goat and the robot), with the tragions of ``tests/landmarks/NAME.tragions.json``
-added where the shared landmarks have none (``tools/place_tragions.py``). Heads without tragions (cow,
+identities 000-002, the goat and the robot; LeePerrySmith with the landmarks ``autobones.detect_landmarks``
+found, kept in ``tests/landmarks``), with the tragions of ``tests/landmarks/NAME.tragions.json`` added
+where the landmarks have none (``tools/place_tragions.py``). Heads without tragions (cow,
 camel, falcon) get the zone checks that need none.
 
 Anatomical places, in the landmarks' frame (``zoo_checks.landmark_frame``: front opisthocranion, else the
@@ -61,8 +62,10 @@ def heads(data):
     """name -> (mesh path, landmarks with the added tragions): zoo.py's landmarked heads."""
     out = {}
     for name, (mesh, lm_path) in zoo.heads_in(data).items():
-        if lm_path is None:
-            continue
+        if lm_path is None:   # a head without shared landmarks: detected ones kept in tests/landmarks
+            lm_path = zoo.TESTS_LM / f"{name}.landmarks.json"
+            if not lm_path.exists():
+                continue
         lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(lm_path).items()}
         extra = zoo.TESTS_LM / f"{name}.tragions.json"
         if extra.exists() and "tragion_l" not in lm:

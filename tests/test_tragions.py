@@ -15,14 +15,15 @@ from shared_data import data
 
 LANDMARKS = Path(__file__).resolve().parent / "landmarks"
 HEADS = ["menpo3d/james.obj", "menpo3d/template.ply", "ict/generic_neutral_mesh.obj", "ict/identity000.obj",
-         "ict/identity001.obj", "ict/identity002.obj"]
+         "ict/identity001.obj", "ict/identity002.obj", "misc/LeePerrySmith.obj"]
 
 
 def _head(rel):
     V, F = load_mesh(data(rel))
     stem = rel.split("/")[1].rsplit(".", 1)[0]
-    lm = {k: np.asarray(v, float) for k, v in json.load(open(data(f"{rel.split('/')[0]}/{stem}.landmarks.json")))
-          ["landmarks"].items()}
+    own = LANDMARKS / f"{stem}.landmarks.json"   # detected ones where the shared head has none
+    path = own if own.exists() else data(f"{rel.split('/')[0]}/{stem}.landmarks.json")
+    lm = {k: np.asarray(v, float) for k, v in json.load(open(path))["landmarks"].items()}
     tr = {k: np.asarray(v, float) for k, v in read_landmarks(LANDMARKS / f"{stem}.tragions.json").items()}
     return V, F, lm, tr
 

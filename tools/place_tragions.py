@@ -37,6 +37,8 @@ HEADS = {  # name -> (mesh, landmarks), relative to ../shared/data
     "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
     "template": ("menpo3d/template.ply", "menpo3d/template.landmarks.json"),
     "generic_neutral_mesh": ("ict/generic_neutral_mesh.obj", "ict/generic_neutral_mesh.landmarks.json"),
+    # no shared landmarks: autobones.detect_landmarks' 27 (MediaPipe), kept in tests/landmarks
+    "LeePerrySmith": ("misc/LeePerrySmith.obj", "tests/LeePerrySmith.landmarks.json"),
 }
 ICT_IDENTITIES = ("identity000", "identity001", "identity002")
 # (front, up) of the left tragion in ex-ex from the exocanthions' midpoint, read off the side views
@@ -48,6 +50,8 @@ PICKS = {
     # a noisy scan: the ear is a ridge (helix, top, at up -0.16) over a crease (lobe, up -0.60) with no
     # tragus resolved; its front edge at front -0.6, the pick 40% down the ear (about +-0.05 ex-ex)
     "james": (-0.61, -0.34),
+    # a sharp ear: the tragus' top at the front of the concha's slit
+    "LeePerrySmith": (-0.89, -0.10),
 }
 
 
@@ -61,7 +65,8 @@ def head_frame(V, F, lm):
 def load(name):
     mesh, marks = HEADS[name]
     V, F = load_mesh(DATA / mesh)
-    lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(DATA / marks).items()}
+    path = OUT / marks[len("tests/"):] if marks.startswith("tests/") else DATA / marks
+    lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(path).items()}
     return V, F, lm
 
 
