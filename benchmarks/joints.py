@@ -215,8 +215,8 @@ def main(argv=None):
         log(f"{name}")
         found = run_head(name, mesh, lm, args.variants.split(","))
         kind = ("human" if human else "animal/cartoon") + ("" if "tragion_l" in lm else ", no tragions")
-        rows.append((name, kind, cell(found, "P head"), cell(found, "T head"), cell(found, "T jaw"),
-                     cell(found, "P mid"), cell(found, "T mid"), neck_cell(found), zone_cell(found, "P zone"), zone_cell(found, "T zone"),
+        rows.append((name, kind, *(cell(found, c) for c in ("P head", "T head", "T jaw", "P mid", "T mid")),
+                     neck_cell(found), zone_cell(found, "P zone"), zone_cell(found, "T zone"),
                      verdict(name, found, human)))
     print(table(rows, args.markdown))
     passed = sum(r[-1] == "pass" for r in rows)

@@ -81,9 +81,9 @@ def panel(title, mesh, marks, size):
         if p is not None:
             px, _ = cam.project(to(p))
             img = render.draw_points(img, px, color=JOINT_COLOURS[name], radius=5)
-    figures = [] if c1 is None else [
-        f"P head {np.linalg.norm(points['P head'] - c1) / u:.2f}, T head {np.linalg.norm(points['T head'] - c1) / u:.2f}",
-        f"T jaw {np.linalg.norm(points['T jaw'] - condyle) / u:.2f} ex-ex"]
+    off = lambda name, t: np.linalg.norm(points[name] - t) / u  # noqa: E731
+    figures = [] if c1 is None else [f"P head {off('P head', c1):.2f}, T head {off('T head', c1):.2f}",
+                                     f"T jaw {off('T jaw', condyle):.2f} ex-ex"]
     pic = Image.fromarray(img)
     draw = ImageDraw.Draw(pic)
     draw.text((8, 6), title, fill=(0, 0, 0))
