@@ -23,6 +23,10 @@ preview of a landmark file placed by hand (no face detector works on a goat).
 skinning) on the default head and on a bust, the skin tinted orange by how far each vertex moved
 (relative to the largest motion): the face and skull turn as one, the neck twists, its base stays.
 
+``joints_side_views``: five heads from the left (the default head, ICT identity002, spot, the cow, the
+cat) with ``place``'s head and neck joints, ``transfer``'s head and jaw joints, and the occiput-C1 centre
+and condyle predicted from the tragions as rings (``gallery/joints_gallery.py``).
+
 ``jaw_open_goat_robot``: the transferred jaw weight (green) on the goat and the robot, the jaw
 closed and opened 20 degrees by linear blend skinning: no torn flap.
 
@@ -529,7 +533,7 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
                     + ["expressions", "expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                       "transfer_symmetric_robot"]
+                       "transfer_symmetric_robot", "joints_side_views"]
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
@@ -538,7 +542,7 @@ def main(argv=None):
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
                           + expression_pictures + ["expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                                                   "transfer_symmetric_robot"]
+                                                   "transfer_symmetric_robot", "joints_side_views"]
                           + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
@@ -552,6 +556,11 @@ def main(argv=None):
             continue
         if name == "jaw_open_goat_robot":
             jaw_open_picture(args.out)
+            continue
+        if name == "joints_side_views":   # issue #32: the joints and their anatomical targets
+            from joints_gallery import joints_side_views
+
+            joints_side_views(args.out)
             continue
         if name == "place_head_turn":
             head_turn_picture(args.out)

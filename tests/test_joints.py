@@ -8,7 +8,7 @@ import trimesh
 
 import autobones
 from autobones.geometry.sample import sample_surface
-from autobones.placement.joints import face_only, find_joints, neck_base_height
+from autobones.placement.joints import PIVOT_DOWN, face_only, find_joints, neck_base_height
 
 from shared_data import data
 
@@ -32,8 +32,8 @@ def test_synthetic_bust_pivot_above_the_neck_and_neck_at_the_shoulders():
     S, _, _ = sample_surface(V, F, 16000, seed=0)
     j = find_joints(S, V[:, 1].min(), V[:, 1].max())
     assert j.head[0] == 0.0 and j.neck[0] == 0.0
-    # the ball is 1 long: the pivot 0.69 below its top (0.8), in its back half, above the neck
-    assert j.head[1] == pytest.approx(0.8 - 0.69, abs=0.02)
+    # the ball is 1 long: the pivot PIVOT_DOWN of that below its top (0.8), in its back half, above the neck
+    assert j.head[1] == pytest.approx(0.8 - PIVOT_DOWN, abs=0.02)
     assert -0.25 < j.head[2] < -0.05
     assert "shoulders" in j.cues["neck"] and "neck_section" in j.cues["neck"]
     # the neck starts where the shoulders widen out (their top at -0.55)

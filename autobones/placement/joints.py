@@ -36,10 +36,16 @@ sections below it widen ``SHOULDERS`` times (a bust's chest: the neck starts the
 from the profile, else ``proportions``, vertex-menton about 1.2 head lengths, Farkas 1994) is where
 the weights' head/neck boundary passes under the chin (:mod:`.locality`).
 
-The proportions were measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
-Chancey's offsets scaled by their ex-ex / 90 mm): the pivot lies 0.68-0.70 of the head's length
-below the vertex, 0.32-0.35 of the section's depth (0.39-0.44 of its width) in front of the back of
-the head; on them the rule lands 0.04-0.07 ex-ex from Chancey's centre.
+The proportions were first measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
+Chancey's offsets scaled by their ex-ex / 90 mm): the pivot 0.68-0.70 of the head's length below the
+vertex, 0.32-0.35 of the section's depth (0.39-0.44 of its width) in front of the back of the head.
+``benchmarks/joints.py`` then measured six human heads of three families in the landmarks' frame
+(the default head, the SMPL man and woman, ICT identities 000-002 with the tragions of
+``tests/landmarks``): Chancey's centre lies 0.695-0.788 of the head's length below the vertex (ICT's
+taller crania 0.78-0.79) and 0.26-0.31 of the section's depth from its back; with 0.69 / 0.34 ICT's
+pivots sat 0.21-0.23 ex-ex off (0.20-0.22 too high). The constants below (0.73 / 0.30) put all six
+within 0.016-0.128 ex-ex (the SMPL man's 0.010 -> 0.114): one head length's proportion cannot fit
+every cranium closer; the ears would.
 """
 from __future__ import annotations
 
@@ -49,9 +55,9 @@ import numpy as np
 
 from ..geometry.normals import triangle_normals
 
-PIVOT_DOWN = 0.69        # of the head's length below the vertex (Chancey's centre on SMPL heads: 0.68-0.70)
+PIVOT_DOWN = 0.73        # of the head's length below the vertex (Chancey's centre on six human heads: 0.695-0.788)
 PIVOT_FLOOR = 0.3        # of the mesh's height: the pivot stays at least this far above its bottom
-PIVOT_BACK = 0.34        # of the section's depth at the pivot, from its back (0.32-0.35 on the same heads)
+PIVOT_BACK = 0.30        # of the section's depth at the pivot, from its back (0.26-0.31 on the same heads)
 PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of its back (0.39-0.44)
 PIVOT_DOWN_MASK = 0.71   # a face mask: of its height below its top (vertex-menton: 0.70-0.72)
 PIVOT_BEHIND_MASK = 0.58  # a face mask: of its height behind its front (0.55-0.58)
