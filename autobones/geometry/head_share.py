@@ -38,6 +38,8 @@ BAND_SHARE = 0.4     # ... and at most this share of the height from the neck ba
 CHIN_MARGIN = 0.05   # head sizes: the boundary passes this far under the chin
 ROUND = 0.05         # head sizes: the boundary's bend at the pivot is rounded over this depth
 OPEN_FACE = 0.22     # vector area / area above which a forward-facing open shell is a face mask
+SMOOTH_RINGS = 6     # Jacobi steps of :func:`smooth_share`: every band at least a few edges wide
+STILL = 0.01         # a share this low moves a vertex by at most about 1% of a head turn's peak: kept
 CHUNK = 65536
 
 
@@ -73,7 +75,7 @@ def mask_distance(C, mask, bound):
 
 
 def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
-               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None):
+               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False):
     """The head's share of each vertex (module docstring): (n,) in [0, 1].
 
     Parameters
@@ -105,6 +107,12 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         joint. A cut slanted to the head's up (an animal's neck leaves its skull backwards: the
         cow's by 39 degrees) puts some of its edge above the lowest heights, which a head turn then
         dragged.
+    keep_chin : bool
+        The face keeps its share down to the chin (``chin``'s height, fading over ``CHIN_MARGIN``
+        below it) even inside the neck base: a measured menton (``transfer``'s landmark) is on the
+        jaw, whose weight must stay there, while the lowest ``neck_base`` of the vertices of a face
+        far denser than its neck reach above it (ICT: 0.03 head sizes). ``place``'s estimated
+        menton does not hold the neck base back.
     """
     C = np.asarray(C, dtype=np.float64)
     y, z = C[:, 1], C[:, 2]
@@ -129,8 +137,41 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     if face is not None:
         # a face-only mesh's lowest vertices are its chin, which turns with the head; a neck's base
         # is still even where the face's band reaches it
+        if not face_only and keep_chin and chin is not None:
+            rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
         share = np.maximum(share, face if face_only else face * rise)
     return share
+
+
+def smooth_share(share, C, F, rings=SMOOTH_RINGS, weld_tol=1e-6):
+    """``share`` (n,) averaged over its mesh neighbours ``rings`` times, its zeros kept (a new array).
+
+    The share's bands are set in head sizes; on a coarse mesh (a 2k-vertex robot, a statue whose
+    jaw reaches the neck base) a band one or two edges wide steps a carried jaw weight by up to 1
+    across an edge. Jacobi steps of the uniform graph Laplacian widen every step to a few edges
+    whatever the mesh's resolution, and the vertices at 0 (the neck base, the nape below the
+    boundary) stay 0, so the base stays still. Coincident vertices (seams of an unwelded mesh,
+    ``C`` canonical, welded within ``weld_tol`` head sizes) are one node, so no seam opens.
+    """
+    from scipy.sparse import coo_matrix
+
+    from .topology import mesh_edges, weld
+
+    share = np.asarray(share, dtype=np.float64)
+    if rings <= 0 or len(F) == 0:
+        return share.copy()
+    _, Fw, index = weld(np.asarray(C, dtype=np.float64), np.asarray(F), weld_tol)
+    k = int(index.max()) + 1
+    E = mesh_edges(Fw)
+    A = coo_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(k, k)).tocsr()
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    u = np.zeros(k)
+    np.maximum.at(u, index, share)    # a welded node takes its highest copy (copies agree but for rounding)
+    fixed = u <= STILL
+    for _ in range(rings):
+        # only ever lowered: a share near the base never rises toward a turning neighbour
+        u = np.where(fixed | (deg == 0), u, np.minimum(u, 0.5 * u + 0.5 * (A @ u) / np.maximum(deg, 1.0)))
+    return u[index]
 
 
 def apply_head_share(W, share, neck=0, head=1):
