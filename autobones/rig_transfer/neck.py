@@ -21,7 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..cut_cues import cut_cues, is_planar_cut
-from ..geometry.head_share import STILL, apply_head_share, face_only, head_share, mask_distance, smooth_share
+from ..geometry.head_share import (STILL, apply_head_share, face_only, head_share, mask_distance, neck_base_height,
+                                   smooth_share)
 from ..geometry.smooth import smoothstep
 from ..geometry.topology import used_vertices
 
@@ -66,6 +67,10 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     canonical = lambda P: (np.asarray(P, dtype=np.float64).reshape(-1, 3) - frame.origin) @ R.T / frame.size  # noqa: E731
     C = canonical(V)
     joint = canonical(skeleton.heads[head])[0]
+    if joint[1] <= neck_base_height(C[used_vertices(F, len(C)), 1]):
+        # no neck under the pivot (a closed head: the robot's joint is 0.06 of its height above its
+        # bottom, under its chin's level): nothing to keep still that is not the head's own
+        return W, None
     chin = [canonical(landmarks[n])[0] for n in CHIN if n in landmarks]
     chin = (min(p[1] for p in chin), max(p[2] for p in chin)) if chin else None
     cues = cut_cues(V, F) if cues is None else cues
@@ -74,7 +79,9 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     share = head_share(C, joint, faces=F, chin=chin, face_only=face_only(C, F), face=hold, cut=cut, keep_chin=True)
     # the bands are head sizes: on a coarse mesh some are an edge wide, a step of the jaw weight
     share = smooth_share(share, C, F)
-    return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), share <= STILL
+    # the jaw's repair (after this) holds the still vertices, but not in the face's band: where the chin
+    # nears the base (the bunny, the falcon statue) the jaw as the landmarks say wins over a still base
+    return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), (share <= STILL) & (hold <= 0)
 
 
 def anatomical_axes(V, F, landmarks, rotation):
