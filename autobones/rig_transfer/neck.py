@@ -8,13 +8,18 @@ lowest vertices: a 15 degree head turn moved the zoo's neck bases by 5-100% of t
 (benchmarks/README.md, zoo check 3). A rigger expects the base to stay put.
 
 So the transferred rig gets the same head share as ``place``'s
-(:mod:`autobones.geometry.head_share`), in the rig's own frame (the landmarks' up and front, head
-sizes: the result does not depend on the file's rotation or unit): 0 on the neck base (the lowest
-vertices and heights and a planar neck cut's neighbourhood), a blend centred on a boundary through
-the head joint that passes under the chin (the menton and pogonion landmarks), 1 above it. The
-carried face (the generic's face depth group without its neck region) and a band around it keep the
-whole share wherever they hang, so the jaw, eye and head weights of the face and of everything above
-the blend are unchanged; below it the head's side is scaled down alike and the neck takes the rest.
+(:mod:`autobones.geometry.head_share`): 0 on the neck base (the lowest vertices and heights and a planar
+neck cut's neighbourhood), a blend centred on a boundary through the head joint that passes under the
+chin (the menton and pogonion landmarks), 1 above it; the carried face (the generic's face depth group
+without its neck region) and a band around it keep the whole share wherever they hang, down to the
+menton even inside the neck base (ICT's dense face puts 5% of its vertices above its chin). It is
+computed in the landmarks' anatomical frame (:func:`anatomical_axes`, head sizes: free of the file's
+rotation and unit), then smoothed over the mesh (:func:`autobones.geometry.head_share.smooth_share`)
+so no band is an edge wide on a coarse mesh. Below the share the head's side is scaled down alike and
+the neck takes the rest; above the blend nothing changes. The vertices left still (outside the face's
+band) are returned for the jaw's repair (:mod:`.jaw`, run after this), which holds them; within the
+face's band the jaw as the landmarks say wins (a chin near the mesh's bottom: the bunny). A head whose
+joint lies in its neck base (a closed head, no neck under the pivot: the robot) is left as carried.
 """
 from __future__ import annotations
 
@@ -64,7 +69,9 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     if parents[head] != neck or not all(_descends(parents, i, head) for i in range(len(names)) if i != neck):
         return W, None   # bones beside the head (shoulders, say): which side of the split they take is unknown
     R = anatomical_axes(V, F, landmarks, frame.rotation)
-    canonical = lambda P: (np.asarray(P, dtype=np.float64).reshape(-1, 3) - frame.origin) @ R.T / frame.size  # noqa: E731
+    def canonical(P):   # head sizes in the anatomical frame: free of the file's rotation and unit
+        return (np.asarray(P, dtype=np.float64).reshape(-1, 3) - frame.origin) @ R.T / frame.size
+
     C = canonical(V)
     joint = canonical(skeleton.heads[head])[0]
     if joint[1] <= neck_base_height(C[used_vertices(F, len(C)), 1]):
@@ -81,7 +88,8 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     share = smooth_share(share, C, F)
     # the jaw's repair (after this) holds the still vertices, but not in the face's band: where the chin
     # nears the base (the bunny, the falcon statue) the jaw as the landmarks say wins over a still base
-    return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), (share <= STILL) & (hold <= 0)
+    still = (share <= STILL) & (hold <= 0)
+    return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), still
 
 
 def anatomical_axes(V, F, landmarks, rotation):
@@ -94,7 +102,9 @@ def anatomical_axes(V, F, landmarks, rotation):
     puts the menton far ahead of the vertex), where its "lowest" vertices were the back of the
     skull and its level boundary behind the pivot cut through the nape.
     """
-    pick = lambda names: next((np.asarray(landmarks[n], dtype=np.float64) for n in names if n in landmarks), None)  # noqa: E731
+    def pick(names):   # the first of ``names`` the landmarks have, or None
+        return next((np.asarray(landmarks[n], dtype=np.float64) for n in names if n in landmarks), None)
+
     nose, top, bottom = pick(("pronasale",)), pick(("vertex", "nasion")), pick(("menton", "pogonion"))
     if nose is None or top is None or bottom is None:
         return rotation
