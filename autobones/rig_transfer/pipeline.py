@@ -239,6 +239,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("skeleton")
 
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
+    lap("attributes")
     labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
     facial_mask = labels == 0
     if "region" in fields and "region" in generic.labels and "neck" in generic.labels["region"]:
@@ -254,7 +255,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
     if jaw_details.get("note"):
         log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
-    lap("attributes")
+    lap("jaw")
 
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
