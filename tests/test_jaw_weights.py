@@ -47,7 +47,7 @@ def rigs():
             if repaired:
                 cache[name, repaired] = V, F, lm, autobones.transfer((V, F), lm)
             else:  # the carried weights, as before the repair
-                with mock.patch.object(pipeline, "repair_jaw_weights", lambda V, F, W, names, lm, details=None: W):
+                with mock.patch.object(pipeline, "repair_jaw_weights", lambda V, F, W, names, lm, details=None, still=None: W):
                     cache[name, repaired] = V, F, lm, autobones.transfer((V, F), lm)
         return cache[name, repaired]
 

@@ -8,7 +8,8 @@ import trimesh
 
 import autobones
 from autobones.geometry.sample import sample_surface
-from autobones.placement.joints import PIVOT_DOWN, face_only, find_joints, neck_base_height
+from autobones.geometry.head_share import face_only, neck_base_height
+from autobones.placement.joints import PIVOT_DOWN, find_joints
 
 from shared_data import data
 

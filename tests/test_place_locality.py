@@ -146,7 +146,7 @@ def test_head_share_is_centred_on_the_pivot_and_passes_under_the_chin():
     """Behind the pivot the head/neck blend is centred on its height; in front the boundary descends
     under the chin, so the chin turns with the head and the throat below it does not; the base is
     pure neck and the skull pure head."""
-    from autobones.placement.locality import head_share
+    from autobones.geometry.head_share import head_share
 
     joint = np.array([0.0, 0.0, -0.2])
     chin = (-0.3, 0.2)  # menton height, the chin's front

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..geometry.normals import triangle_normals
+from ..geometry.head_share import NECK_BASE
 
 PIVOT_DOWN = 0.73        # of the head's length below the vertex (Chancey's centre on six human heads: 0.695-0.788)
 PIVOT_FLOOR = 0.3        # of the mesh's height: the pivot stays at least this far above its bottom
@@ -68,8 +68,6 @@ SLAB = 0.02            # head sizes: height of a profile slab
 MIDLINE = 0.06         # head sizes: half-width of the strip the midline profile is taken from
 UNDER_CHIN = 0.06      # head sizes: the neck's sections start this far below the pivot
 SHOULDERS = 1.5        # a section this many times the narrowest neck's width is the shoulders
-OPEN_FACE = 0.22       # vector area / area above which a forward-facing open shell is a face mask
-NECK_BASE = 0.05       # of the vertices and of the height: the neck base, kept still
 BASE_CLEARANCE = 0.15  # of the height: the pivot stays this far above the neck base
 
 
@@ -109,26 +107,6 @@ class Joints:
                 "neck_section_height": None if self.neck_section is None else float(self.neck_section)}
 
 
-def neck_base_height(heights, share=NECK_BASE):
-    """Top of the neck base: the higher of the lowest ``share`` of the vertices (a dense bust base,
-    a coarse neck under a dense face) and ``share`` of the height above the lowest vertex.
-    ``heights``: (k,) heights of the used vertices."""
-    heights = np.asarray(heights, dtype=np.float64)
-    low = float(heights.min())
-    return max(float(np.quantile(heights, share)), low + share * (float(heights.max()) - low))
-
-
-def face_only(V, F):
-    """True for a face mask: an open shell whose opening faces back or front (the vector area of a
-    closed head sums to zero, a neck cut's points down, a face-only capture's along the depth axis).
-    ``V`` canonical."""
-    N = triangle_normals(np.asarray(V, dtype=np.float64), np.asarray(F))
-    area = np.linalg.norm(N, axis=1).sum()
-    vec = N.sum(axis=0)
-    size = np.linalg.norm(vec)
-    return bool(size > OPEN_FACE * max(area, 1e-300) and abs(vec[2]) > 0.7 * size)
-
-
 def height_profile(S, bottom, top, slab=SLAB, midline=MIDLINE):
     """Slab-by-slab extents of a canonical surface sample ``S`` (k, 3) between ``bottom`` and ``top``.
 
@@ -163,9 +141,9 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
     chin : float or None
         The menton's height from the midline profile, None when no chin step was found.
     face_mask : bool
-        The mesh is a face-only capture (:func:`face_only`).
+        The mesh is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
     base : float, optional
-        The neck base's top (:func:`neck_base_height`); default ``NECK_BASE`` of the height.
+        The neck base's top (:func:`autobones.geometry.head_share.neck_base_height`); default ``NECK_BASE`` of the height.
 
     Returns
     -------

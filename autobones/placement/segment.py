@@ -25,9 +25,10 @@ from typing import Optional
 import numpy as np
 from scipy.cluster.hierarchy import fcluster
 
+from ..geometry.head_share import face_only, neck_base_height
 from ..geometry.sample import sample_surface
 from ..geometry.topology import used_vertices
-from .joints import Joints, face_only, find_joints, neck_base_height
+from .joints import Joints, find_joints
 
 JOINT_SAMPLES = 16000
 

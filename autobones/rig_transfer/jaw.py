@@ -96,7 +96,7 @@ def _mean_edge_length(n, E, V):
     return total / np.maximum(count, 1)
 
 
-def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
+def repair_jaw(V, F, jaw, landmarks, keep=None, details=None, still=None):
     """The jaw weight (n,) checked against the landmarks and repaired (module doc).
 
     Parameters
@@ -111,7 +111,9 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
         The head's landmarks (contract names, ``spec/landmarks.md``), same frame and units as ``V``.
     keep : (n,) bool, optional
         Vertices whose jaw weight must not change (eyeballs bound to the eye bones).
-    details : dict, optional
+    still : (n,) bool, optional
+        Vertices held at their jaw weight unless they are seeds (the neck base, made still before:
+        :mod:`.neck`): the falloff is solved smooth up to them instead of stepping there.
         Filled with ``lower`` / ``upper`` (n,) bool (the seeds), ``on_line`` (k,) bool and ``edges``
         (k, 2) (:func:`lip_line_edges`), ``rounds`` (int), ``max_jump`` (float, off the lip line) and
         ``note`` (str, :func:`autobones.rig_transfer.jaw_seeds.jaw_note`: what the landmarks cannot
@@ -154,6 +156,12 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None):
         kw[index[np.asarray(keep, dtype=bool)]] = True
         value = np.where(kw, ww, value)
         fixed |= kw
+    if still is not None:
+        sw = np.zeros(nw, dtype=bool)
+        sw[index[np.asarray(still, dtype=bool)]] = True
+        sw &= ~(lower | upper)   # a chin seed in the neck base (a chin at the mesh's bottom) wins
+        value = np.where(sw, ww, value)
+        fixed |= sw
     check = ~on_line_w & ~(fixed[Ew[:, 0]] & fixed[Ew[:, 1]])  # two fixed ends: nothing to solve
     # far from any jaw weight nothing is solved (the screened field decays within a few edges)
     settled = _settled(Vw, ww, lower, fixed, max(REACH * fu, 30.0 * h_med))
@@ -325,16 +333,16 @@ def with_jaw(W, j, head, jaw):
     return np.clip(out, 0.0, None)
 
 
-def repair_jaw_weights(V, F, W, names, landmarks, details=None):
+def repair_jaw_weights(V, F, W, names, landmarks, details=None, still=None):
     """Skin weights ``W`` (n, b) (bone ``names``, list of b str) with the jaw column repaired by
     :func:`repair_jaw` and the head bone taking up the difference (:func:`with_jaw`); eyeball
-    vertices (any ``eye_l`` / ``eye_r`` weight) keep theirs. A copy of ``W`` without a ``jaw`` bone.
-    Rows keep their sums (1)."""
+    vertices (any ``eye_l`` / ``eye_r`` weight) keep theirs, ``still`` ones (n,) bool too unless
+    they are seeds. A copy of ``W`` without a ``jaw`` bone. Rows keep their sums (1)."""
     W = np.asarray(W, dtype=np.float64)
     if "jaw" not in names:
         return W.copy()
     j = names.index("jaw")
     eyes = [names.index(e) for e in ("eye_l", "eye_r") if e in names]
     keep = (W[:, eyes].sum(axis=1) > 0) if eyes else None
-    jaw = repair_jaw(V, F, W[:, j], landmarks, keep=keep, details=details)
+    jaw = repair_jaw(V, F, W[:, j], landmarks, keep=keep, details=details, still=still)
     return with_jaw(W, j, names.index("head") if "head" in names else None, jaw)

@@ -13,8 +13,10 @@ Different Face Models", §3.7 for the whole method); one module a stage:
    muscle insertions ride the correspondence itself; on a head with tragions the
    ``head`` and ``jaw`` joints then sit where the generic's do relative to its ear
    canals (:func:`anchor_joints_at_the_ears`; Chancey et al. 2007);
-4. attributes (fields, eyes): skin weights, region labels and every other field land on
-   the head's own vertices, with unreliable matches inpainted; eyeballs follow the eye bones;
+4. attributes (fields, eyes, jaw, neck): skin weights, region labels and every other field land on
+   the head's own vertices, with unreliable matches inpainted; eyeballs follow the eye bones; the
+   jaw weight is repaired from the landmarks and the neck base made still (the head/neck blend
+   through the head joint, as ``place``'s);
 5. the result is a :class:`autobones.rig.Rig`, saved as the same skinned glTF as ``place``
    with muscles and fields in the sidecars.
 
@@ -33,6 +35,7 @@ from .correspondence import dense_correspondence
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
+from .neck import still_neck_base
 from .fields import transfer_fields
 from .symmetry import MAX_LANDMARK_MISMATCH, Symmetry
 from .under_skin import carry_muscles, under_skin_warp
@@ -236,17 +239,24 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("skeleton")
 
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
-    # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
-    jaw_details = {}
-    W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details)
-    if jaw_details.get("note"):
-        log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
     lap("attributes")
-
     labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
     facial_mask = labels == 0
     if "region" in fields and "region" in generic.labels and "neck" in generic.labels["region"]:
         facial_mask &= fields["region"] != generic.labels["region"].index("neck")
+    # the neck base still on a head turn, the head/neck blend on the head joint (the generic's own blend
+    # lies far below it and the warp drags it anywhere: benchmarks zoo check 3); the face is untouched.
+    # Before the jaw's repair, which has the last word where the chin reaches the neck base (a chin at
+    # the mesh's bottom: the bunny) and keeps the jaw weight's falloff smooth
+    W, still = still_neck_base(V, F, W, skeleton, frame, lm, facial_mask)
+    lap("neck")
+    # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
+    jaw_details = {}
+    W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
+    if jaw_details.get("note"):
+        log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
+    lap("jaw")
+
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",

@@ -1,0 +1,197 @@
+"""The head's share of the skin weights: a still neck base, a head/neck blend through the head joint.
+
+One operation for both rigs (``place``'s :mod:`autobones.placement.locality` and ``transfer``'s
+:mod:`autobones.rig_transfer.neck`): a rigger expects a head turn to leave the neck's base still and
+to bend the neck around the head joint (the occiput-C1 pivot), whatever the weights came from (bone
+heat splits the neck from the head wherever the two bones' segments are equidistant; a carried
+generic rig puts its own blend wherever the warp took it).
+
+:func:`head_share` is each vertex's share of the head and its children, from where it lies: 0
+below a boundary through the head joint and 1 above it, a smooth step across a band centred on the
+boundary. Behind the pivot the boundary is level with it (the suboccipital region: the skull above
+turns, the nape below stays); in front it descends to pass under the chin, so the jaw, chin and
+lips turn with the head and the throat stays with the neck. The neck base is pure neck: the share
+is 0 up to the higher of the lowest ``NECK_BASE`` of the vertices and ``NECK_BASE`` of the mesh's
+height (and near a planar neck cut, which an animal's slanted neck lifts above the lowest heights),
+rising over the next ``NECK_RISE`` of the way to the joint. The face and its band keep the whole
+share wherever they hang (a long muzzle below any boundary through the pivot).
+
+:func:`apply_head_share` then moves weight between the neck and the rest so each row's head side
+sums to the share: the neck gets ``1 - share``; the head and its children keep their weights where
+these sum to less than the share (the head bone takes the rest) and are scaled down alike where
+more. Rows stay non-negative and sum to one. Everything is per vertex in the canonical frame (head
+sizes, +Y up, +Z front), so it is unit- and frame-free, and near-linear in the vertex count.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .normals import triangle_normals
+from .smooth import smoothstep
+from .topology import used_vertices
+
+NECK_BASE = 0.05     # of the vertices and of the height: the neck base, kept still
+NECK_RISE = 0.30     # of the way from the neck base to the joint: the head's share rises over it
+HEAD_BAND = 0.10     # head sizes: half-width of the neck/head blend across the boundary
+BAND_SHARE = 0.4     # ... and at most this share of the height from the neck base to the joint
+CHIN_MARGIN = 0.05   # head sizes: the boundary passes this far under the chin
+ROUND = 0.05         # head sizes: the boundary's bend at the pivot is rounded over this depth
+OPEN_FACE = 0.22     # vector area / area above which a forward-facing open shell is a face mask
+SMOOTH_RINGS = 6     # Jacobi steps of :func:`smooth_share`: every band at least a few edges wide
+STILL = 0.01         # a share this low moves a vertex by at most about 1% of a head turn's peak: kept
+CHUNK = 65536
+
+
+def neck_base_height(heights, share=NECK_BASE):
+    """Top of the neck base: the higher of the lowest ``share`` of the vertices (a dense bust base,
+    a coarse neck under a dense face) and ``share`` of the height above the lowest vertex.
+    ``heights``: (k,) heights of the used vertices."""
+    heights = np.asarray(heights, dtype=np.float64)
+    low = float(heights.min())
+    return max(float(np.quantile(heights, share)), low + share * (float(heights.max()) - low))
+
+
+def face_only(V, F):
+    """True for a face mask: an open shell whose opening faces back or front (the vector area of a
+    closed head sums to zero, a neck cut's points down, a face-only capture's along the depth axis).
+    ``V`` canonical."""
+    N = triangle_normals(np.asarray(V, dtype=np.float64), np.asarray(F))
+    area = np.linalg.norm(N, axis=1).sum()
+    vec = N.sum(axis=0)
+    size = np.linalg.norm(vec)
+    return bool(size > OPEN_FACE * max(area, 1e-300) and abs(vec[2]) > 0.7 * size)
+
+
+def mask_distance(C, mask, bound):
+    """(n,) distance of each point of ``C`` (n, 3) to the points under ``mask`` (n,) bool: 0 on it,
+    inf beyond ``bound`` and everywhere when the mask is empty (one k-d tree query bounded by it)."""
+    mask = np.asarray(mask, dtype=bool)
+    if not mask.any():
+        return np.full(len(C), np.inf)
+    d, _ = cKDTree(C[mask]).query(C, distance_upper_bound=bound)
+    d[mask] = 0.0
+    return d
+
+
+def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
+               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False):
+    """The head's share of each vertex (module docstring): (n,) in [0, 1].
+
+    Parameters
+    ----------
+    C : (n, 3) float
+        Canonical vertices (head sizes, +Y up, +Z front).
+    joint : (3,) float
+        The head joint (the pivot); the boundary runs through it.
+    faces : (m, 3) int, optional
+        Triangles: the neck base is measured on the vertices they use.
+    chin : (float, float), optional
+        The menton's height and the chin's front depth: in front of the pivot the boundary descends
+        to ``CHIN_MARGIN`` under that point (its slope kept between 0.3 and 2); default slope 1.
+    face_only : bool
+        A face-only mesh: its face turns with the head down to its lowest vertices (the chin of a
+        mask); a neck below the face still keeps its base still.
+    face : (n,) float, optional
+        1 on the facial mask falling to 0 across its band: the face turns with the head wherever
+        it hangs (a long muzzle below any boundary through the pivot).
+    band : float
+        Half-width of the blend across the boundary, head sizes (at most ``BAND_SHARE`` of the
+        height from the neck base to the joint).
+    neck_base, neck_rise : float
+        See the module docstring.
+    cut : ((3,) float, (3,) float), optional
+        A planar neck cut's centre and unit normal (pointing out of the mesh, canonical frame;
+        :func:`autobones.cut_cues.cut_cues`): the vertices within ``neck_base`` of the height from it
+        are neck base too, the head's share rising over the next ``neck_rise`` of the way to the
+        joint. A cut slanted to the head's up (an animal's neck leaves its skull backwards: the
+        cow's by 39 degrees) puts some of its edge above the lowest heights, which a head turn then
+        dragged.
+    keep_chin : bool
+        The face keeps its share down to the chin (``chin``'s height, fading over ``CHIN_MARGIN``
+        below it) even inside the neck base: a measured menton (``transfer``'s landmark) is on the
+        jaw, whose weight must stay there, while the lowest ``neck_base`` of the vertices of a face
+        far denser than its neck reach above it (ICT: 0.03 head sizes). ``place``'s estimated
+        menton does not hold the neck base back.
+    """
+    C = np.asarray(C, dtype=np.float64)
+    y, z = C[:, 1], C[:, 2]
+    used = y if faces is None or len(faces) == 0 else y[used_vertices(np.asarray(faces), len(C))]
+    yj, zj = float(joint[1]), float(joint[2])
+    base = min(neck_base_height(used, neck_base), yj - 1e-6)
+    slope = 1.0
+    if chin is not None:
+        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), 0.3, 2.0))
+    # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
+    boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
+    half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
+    rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+    if cut is not None and not face_only:
+        centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
+        above = (C - centre) @ -normal
+        top = float((np.asarray(joint, dtype=np.float64) - centre) @ -normal)
+        low = neck_base * float(np.ptp(used))
+        if top > low:
+            rise = rise * smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
+    share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
+    if face is not None:
+        # a face-only mesh's lowest vertices are its chin, which turns with the head; a neck's base
+        # is still even where the face's band reaches it
+        if not face_only and keep_chin and chin is not None:
+            rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
+        share = np.maximum(share, face if face_only else face * rise)
+    return share
+
+
+def smooth_share(share, C, F, rings=SMOOTH_RINGS, weld_tol=1e-6):
+    """``share`` (n,) averaged over its mesh neighbours ``rings`` times, its zeros kept (a new array).
+
+    The share's bands are set in head sizes; on a coarse mesh (a 2k-vertex robot, a statue whose
+    jaw reaches the neck base) a band one or two edges wide steps a carried jaw weight by up to 1
+    across an edge. Jacobi steps of the uniform graph Laplacian widen every step to a few edges
+    whatever the mesh's resolution, and the vertices at 0 (the neck base, the nape below the
+    boundary) stay 0, so the base stays still. Coincident vertices (seams of an unwelded mesh,
+    ``C`` canonical, welded within ``weld_tol`` head sizes) are one node, so no seam opens.
+    """
+    from scipy.sparse import coo_matrix
+
+    from .topology import mesh_edges, weld
+
+    share = np.asarray(share, dtype=np.float64)
+    if rings <= 0 or len(F) == 0:
+        return share.copy()
+    _, Fw, index = weld(np.asarray(C, dtype=np.float64), np.asarray(F), weld_tol)
+    k = int(index.max()) + 1
+    E = mesh_edges(Fw)
+    A = coo_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(k, k)).tocsr()
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    u = np.zeros(k)
+    np.maximum.at(u, index, share)    # a welded node takes its highest copy (copies agree but for rounding)
+    fixed = u <= STILL
+    for _ in range(rings):
+        # only ever lowered: a share near the base never rises toward a turning neighbour
+        u = np.where(fixed | (deg == 0), u, np.minimum(u, 0.5 * u + 0.5 * (A @ u) / np.maximum(deg, 1.0)))
+    return u[index]
+
+
+def apply_head_share(W, share, neck=0, head=1):
+    """Give each row of ``W`` (n, b) the head side ``share`` (n,) (module docstring); in place, returned.
+
+    ``neck`` and ``head`` are the columns of the neck bone and of the head bone; every other column
+    is the head's side (the head's children: jaw, eyes, facial bones). Rows must be non-negative
+    and sum to one; they still do after.
+    """
+    n, b = W.shape
+    others = np.array([j for j in range(b) if j != neck], dtype=np.int64)
+    head_col = int(np.flatnonzero(others == head)[0])
+    for s in range(0, n, CHUNK):
+        blk, h = W[s:s + CHUNK][:, others], share[s:s + CHUNK]
+        total = blk.sum(axis=1)
+        # too much weight above the share: all scaled down alike; too little: the head bone takes the
+        # rest (scaling the children up would steepen their own steps beyond the weights')
+        over = total > h
+        blk[over] *= (h[over] / total[over])[:, None]
+        blk[~over, head_col] += (h - total)[~over]
+        W[s:s + CHUNK, others] = blk
+        W[s:s + CHUNK, neck] = 1.0 - h
+    return W
