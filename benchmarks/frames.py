@@ -43,7 +43,7 @@ def drift_deg(R, R0, turn):
 
 
 def measure(item):
-    name, (mesh, lm_path) = item
+    name, (mesh, lm_path), copies = item
     V, F = load_mesh(mesh)
     lm = read_landmarks(lm_path)
     ref = zc.landmark_frame(V, F, lm)
@@ -51,7 +51,7 @@ def measure(item):
     R0 = detect_frame(V, F).rotation
     seconds = time.perf_counter() - t
     row = {"head": name, "as-is": off(R0, ref), "rot": [], "drift": (-1.0, "")}
-    for copy in COPIES:
+    for copy in copies:
         var = zc.make_variant(copy, V, F, lm, 0)
         R = detect_frame(var.V, var.F).rotation
         if copy.startswith("rot"):
@@ -68,19 +68,21 @@ def main(argv=None):
     ap.add_argument("--heads", help="comma-separated head names (default: every landmarked head)")
     ap.add_argument("--data", type=Path, default=zoo.DATA)
     ap.add_argument("-j", "--jobs", type=int, default=1)
+    ap.add_argument("--copies", default=",".join(COPIES), help="comma-separated copies (default: all 8)")
     args = ap.parse_args(argv)
     heads = {n: v for n, v in zoo.heads_in(args.data).items() if v[1] is not None}
     if args.heads:
         heads = {n: heads[n] for n in args.heads.split(",")}
+    items = [(n, v, args.copies.split(",")) for n, v in heads.items()]
     t = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as pool:
-        rows = list(pool.map(measure, heads.items())) if args.jobs > 1 else list(map(measure, heads.items()))
+        rows = list(pool.map(measure, items)) if args.jobs > 1 else list(map(measure, items))
     print("| head | as-is off | rotations off (worst) | rotations > 30° | drift, degrees (worst copy) | s |")
     print("|---|---|---|---|---|---|")
     for r in rows:
         bad = sum(d > zc.FRAME_DEG for d in r["rot"])
         drift, copy = r["drift"]
-        print(f"| {r['head']} | {r['as-is']:.1f}° | {max(r['rot']):.1f}° | {bad}/{len(r['rot'])} | "
+        print(f"| {r['head']} | {r['as-is']:.1f}° | {max(r['rot'], default=float('nan')):.1f}° | {bad}/{len(r['rot'])} | "
               f"{drift:.1e}° ({copy or '-'}) | {r['seconds']:.2f} |")
     as_is = sum(r["as-is"] > zc.FRAME_DEG for r in rows)
     rot = sum(sum(d > zc.FRAME_DEG for d in r["rot"]) for r in rows)
