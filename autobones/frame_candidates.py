@@ -78,7 +78,8 @@ def front_part(ref, depth):
 
 def cut_candidates(P, normal, candidates, cues, ref):
     """The (up, front) candidates a cut allows, the reference to score them against, and whether
-    the head was taken for a face-only capture. A flat cut or an open rim (neck, bust base) marks
+    the head was taken for a face-only capture (then, for each candidate, a pair of the reference's
+    front parts: see :func:`autobones.reference_overlay.best_part_scores`). A flat cut or an open rim (neck, bust base) marks
     the bottom when one is clear; a face-only capture faces away from its opening, which is its
     back, not its bottom: a shell open that wide, or one whose clear "cut" lies opposite the way it
     faces (then only the fronts along that way stay, scored against as deep a front part of the
@@ -101,12 +102,15 @@ def cut_candidates(P, normal, candidates, cues, ref):
     behind = (winner is not None and np.array(winner) @ facing > 0.7) or (
         is_planar_cut(cues) and cues["loop_normal"] @ facing < -0.7)
     if mask and (openness > FACE_SHELL or (openness > OPEN_SHELL and behind)):
-        # scored against the reference's front part as deep as the capture is thin: its least
-        # extent along the fronts it may face, not its extent along the way the opening faces (an
-        # opening cut aslant faces off the front: the menpo template's by 33 degrees, and a part
-        # that deep made its face pitched 47 degrees overlay best)
-        depth = min(np.ptp(P @ f) for _, f in mask) / max(np.ptp(P @ normal), 1e-300)
-        return mask, front_part(ref, depth), True
+        # how deep a part of the reference head the capture matches is not known from the way its
+        # opening faces (an opening cut aslant faces off the front: the menpo template's by 33
+        # degrees, and a part that deep made its face pitched 47 degrees overlay best): each front
+        # is scored against two, as deep as the capture is along that front and as deep as it is
+        # thin (its least extent over the fronts kept), and the better counts (the first alone
+        # turned James' front quarter upside down, the second alone pitched the template)
+        across = max(np.ptp(P @ normal), 1e-300)
+        thin = front_part(ref, min(np.ptp(P @ f) for _, f in mask) / across)
+        return mask, [(thin, front_part(ref, np.ptp(P @ f) / across)) for _, f in mask], True
     if winner is not None:
         return near([winner]), ref, False
     runner = next((k for k in ups if np.array(k) @ np.array(top) < NEIGHBOUR), None)

@@ -48,7 +48,7 @@ from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
 from .geometry.topology import used_vertices
-from .reference_overlay import SAMPLE_COUNT, default_reference, overlay_scores, refine_angle
+from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
 __all__ = ["Frame", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis", "reflect",
            "default_reference", "SAMPLE_COUNT"]
@@ -200,7 +200,10 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     if len(candidates) > 1 and up_v is None:
         candidates, ref, face_only = cut_candidates(P, normal, candidates, cues, ref)
     if len(candidates) > 1:
-        scores = overlay_scores(P, candidates, ref)
+        if face_only:  # a face capture: each candidate against the better of its two front parts
+            scores, ref = best_part_scores(P, candidates, ref)
+        else:
+            scores = overlay_scores(P, candidates, ref)
         if face_only and front_v is None and planar:
             # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
             # capture must overlay the reference's face far better than its whole head stood on

@@ -28,6 +28,14 @@ def overlay_scores(P, candidates, ref):
         return list(pool.map(lambda c: overlay_score(P, c[0][0], c[0][1], c[1]), zip(candidates, refs)))
 
 
+def best_part_scores(P, candidates, parts):
+    """For each (up, front) candidate, :func:`overlay_score` against the better of its reference parts
+    (``parts[i]``, a tuple of canonical samples): the scores and the part each was scored on."""
+    every = [overlay_scores(P, candidates, [p[k] for p in parts]) for k in range(len(parts[0]))]
+    best = [int(np.argmin(s)) for s in zip(*every)]
+    return [float(min(s)) for s in zip(*every)], [p[k] for p, k in zip(parts, best)]
+
+
 def refine_angle(P, normal, up, front, ref, half=15.0, evaluations=8):
     """(up, front) turned about the symmetry ``normal`` by the angle within +-``half`` degrees
     that overlays the reference best (the overlay held at that turn: a golden-section search on a
