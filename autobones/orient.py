@@ -67,7 +67,8 @@ HUMAN_LIKE = 0.13
 # shared heads' front halves and quarters score 0.08-0.25, the zoo's wide-necked beast 0.30
 FACE_UNLIKE = 0.28
 # a face-only capture whose opening is a planar cut stays one only when the reference's face overlays it
-# better than this share of the whole reference head stood on that cut does
+# better than this share of the whole reference head stood on that cut does (the shared heads' front
+# halves and quarters: 0.25-0.70 of it; the zoo's wide-necked armadillo and beast: 0.85-0.94)
 FACE_VS_NECK = 0.75
 
 
@@ -207,10 +208,8 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         if face_only and front_v is None and planar:
             # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
             # capture must overlay the reference's face far better than its whole head stood on
-            # the cut (the shared heads' front halves and quarters: 0.25-0.42 of it; the zoo's
-            # wide-necked armadillo and beast: 0.85-0.94)
-            # stood on the cut: the up straight across it (the 12 ups start there), as the cut
-            # rule stands a head; ups 30-60 degrees off it lay a face capture on its back and won
+            # the cut, straight across it (the 12 ups start there; ups 30-60 degrees off it laid
+            # Lee Perry-Smith's front half on its back)
             neck = [(u, f) for u, f in every if u @ -cues["loop_normal"] > 0.95]
             neck_scores = overlay_scores(P, neck, full_ref) if neck else []
             if neck and min(scores) > FACE_VS_NECK * min(neck_scores):
