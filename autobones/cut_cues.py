@@ -23,7 +23,8 @@ def cut_cues(V, F):
     area2 = np.linalg.norm(cross, axis=1)
     normal = np.divide(cross, area2[:, None], out=np.zeros_like(cross), where=area2[:, None] > 0)
     heights = V[used_vertices(F, len(V))]
-    Vw, Fw, _ = weld(V, F, 1e-6 * np.ptp(heights, axis=0).max())
+    # the weld's tolerance from the distance to the centroid, not the extent along the file's axes
+    Vw, Fw, _ = weld(V, F, 2e-6 * np.sqrt(((heights - heights.mean(axis=0)) ** 2).sum(axis=1).max()))
     # edge keys (low * n + high); an open-rim edge is one whose key occurs once
     a, b = Fw.T.ravel(), Fw[:, [1, 2, 0]].T.ravel()
     key = np.sort(np.minimum(a, b) * len(Vw) + np.maximum(a, b))
@@ -126,7 +127,8 @@ def cut_up_front(P, normal, offset, cues, slab=0.02):
     up = -d + (d @ normal) * normal
     up /= np.linalg.norm(up)
     front = np.cross(normal, up)
-    size = np.ptp(P, axis=0).max()
+    # the head size along the plane's own axes, not the file's (a turned copy measures the same)
+    size = np.ptp(P @ np.array([normal, up, front]).T, axis=0).max()
     profile = P[np.abs(P @ normal - offset) < slab * size]
     reach = (profile - cues["loop_centre"]) @ front
     ahead, behind = max(reach.max(), 0.0), max(-reach.min(), 0.0)

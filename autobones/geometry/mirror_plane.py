@@ -87,15 +87,17 @@ def shape_starts(P, tree, lines=96, keep=4, spread=20.0):
             break
     # the reflective ICP stalls a few degrees off (ICT turned: 0.050 against its 0.033), so each
     # start is first settled by a pattern search of the same score
-    return [pattern_search(lambda n: mirror_error(sub, tree, n, centre @ n), n) for n in starts]
+    return [pattern_search(lambda n: mirror_error(sub, tree, n, centre @ n), n, E) for n in starts]
 
 
-def pattern_search(score, n, step=6.0, smallest=0.25):
+def pattern_search(score, n, frame, step=6.0, smallest=0.25):
     """The unit normal near ``n`` (3,) that lowers ``score(n)``: tilt it by ``step`` degrees about
-    two axes across it, keep the best tilt that scores lower, halve the step when none does."""
+    two axes across it, keep the best tilt that scores lower, halve the step when none does. The
+    tilt axes come from ``frame`` (3, 3), columns the sample's signed principal axes, not from the
+    input axes: the search then takes the same steps on a turned copy of the sample."""
     best = score(n)
     while step >= smallest:
-        a = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+        a = np.cross(n, frame[:, int(np.argmin(np.abs(n @ frame)))])
         a /= np.linalg.norm(a)
         b = np.cross(n, a)
         t = np.tan(np.radians(step))
