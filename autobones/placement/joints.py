@@ -55,7 +55,7 @@ import numpy as np
 
 from ..geometry.head_share import NECK_BASE
 
-PIVOT_DOWN = 0.73        # of the head's length below the vertex (Chancey's centre on six human heads: 0.695-0.788)
+PIVOT_DOWN = 0.77        # of the head's length below the vertex (Chancey's centre on six human heads, shape-only frames: 0.71-0.82)
 PIVOT_FLOOR = 0.3        # of the mesh's height: the pivot stays at least this far above its bottom
 PIVOT_BACK = 0.30        # of the section's depth at the pivot, from its back (0.26-0.31 on the same heads)
 PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of its back (0.39-0.44)
@@ -157,7 +157,7 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
     if len(strip) and strip.max() < top - SLAB:
         top = float(strip.max())
         head_cues.append("midline_top")
-    length = _head_length(prof, top)
+    length = head_length(prof, top)
     if face_mask:
         # no back to measure the head's length on: vertex-menton from the chin step, else the
         # mask's height (a mask spans about vertex to menton); the pivot lies far behind the mask
@@ -169,14 +169,15 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * scale
         head_cues += ["face_only"] + (["chin"] if by_chin else [])
     else:
-        # the head's height scale is its length, front to back (vertex-menton is about the head's
-        # length on a human), or its height down to the chin when the mesh ends there and that is
-        # larger (a tall cartoon head); a chin step found above a neck may be a beard's or a
-        # throat fold's, and is not trusted to scale the head
+        # the head's height scale is its length, front to back, or the length its height down to
+        # the chin implies (vertex-menton is MENTON_DEPTHS head lengths) when the mesh ends there and
+        # that is larger (a tall cartoon head); a chin step found above a neck may be a beard's or a
+        # throat fold's, and is not trusted to scale the head. (Vertex-menton taken as one length
+        # put the SMPL woman's pivot 0.25 ex-ex low once her chin step was found at her menton.)
         scale = length
         head_cues.append("head_length")
-        if chin is not None and chin - bottom < CHIN_CUT * height and top - chin > length:
-            scale = top - float(chin)
+        if chin is not None and chin - bottom < CHIN_CUT * height and top - chin > MENTON_DEPTHS * length:
+            scale = (top - float(chin)) / MENTON_DEPTHS
             head_cues.append("chin")
         y_head = top - PIVOT_DOWN * scale
         base = bottom + NECK_BASE * height if base is None else float(base)
@@ -201,9 +202,11 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
                   cues={"head": head_cues, "neck": neck_cues})
 
 
-def _head_length(prof, top):
-    """Length of the head, front to back: the largest depth of the slabs in the top half head size."""
-    upper = prof["y"] > top - 0.5
+def head_length(prof, top, reach=0.5):
+    """Length of the head, front to back: the largest depth of the slabs within ``reach`` (head sizes) of the top
+    (``prof`` from :func:`height_profile`). Unlike the depth at one level it hardly moves when the
+    head is pitched a few degrees: the slab that holds it changes, its length barely."""
+    upper = prof["y"] > top - reach
     d = prof["zmax"][upper] - prof["zmin"][upper]
     return float(np.nanmax(d)) if np.isfinite(d).any() else 1.0
 

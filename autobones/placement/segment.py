@@ -28,9 +28,11 @@ from scipy.cluster.hierarchy import fcluster
 from ..geometry.head_share import face_only, neck_base_height
 from ..geometry.sample import sample_surface
 from ..geometry.topology import used_vertices
-from .joints import Joints, find_joints
+from .joints import Joints, find_joints, head_length, height_profile
 
 JOINT_SAMPLES = 16000
+CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's length is read in
+TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (module _chin_height)
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")
@@ -116,8 +118,11 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     head_mean, neck_mean = upper.mean(axis=0), lower.mean(axis=0)
     head_mean[0] = neck_mean[0] = 0.0  # on the symmetry plane
     face_s = S[s_labels == FACE]
-    level = S[np.abs(S[:, 1] - head_mean[1]) < 0.03]
-    head_depth = np.ptp(level[:, 2]) if len(level) else np.ptp(S[:, 2])
+    top = S[:, 1].max()
+    prof = height_profile(S, S[:, 1].min(), top)
+    # the cranium's length (glabella-opisthocranion), measured above the nose: a head pitched up
+    # brings nose and chin forward into the top half head size (ICT at 10 degrees: +7%)
+    length = head_length(prof, top, reach=CRANIUM * head_length(prof, top))
     cut, chin = -np.inf, None
     # the midline profile from the sample and the mesh's own vertices near the midline: a 4,000-point
     # sample leaves some 1% bins of the 3% strip with no skin point, and an inner mouth part behind
@@ -125,7 +130,7 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     # the chin of ICT's head)
     Vm = V[used_vertices(F, len(V))]
     profile = np.vstack([S, Vm[np.abs(Vm[:, 0]) < 0.03]])
-    found = _chin_height(profile, neck_height, head_depth, S[:, 1].max())
+    found = _chin_height(profile, length, top)
     for h, is_chin in ((found, True), (neck_height, False)):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
         if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
@@ -275,20 +280,26 @@ def _carry(sample_value, sample_label, value):
     return np.where(left_closer, sl[i - 1], sl[i])
 
 
-def _chin_height(points, neck_height, head_depth, top, strip=0.03, bin_size=0.01):
+def _chin_height(points, length, top, strip=0.03, bin_size=0.01):
     """Height of the menton, or None if no chin step is found.
 
     Below the nose tip, the midline front profile of the head steps back
     sharply at the nose base and under the chin (and, on a bust, at its base).
     Of those steps, the chin is the one nearest the height anthropometry expects
-    (vertex to menton is about 1.2 times the head's depth; anthropometry.md).
+    (vertex to menton is about 1.2 times the head's length, glabella-opisthocranion;
+    anthropometry.md). The head's length, not its depth at the middle group's level nor
+    that group's split: both moved with a few degrees of pitch (ICT's head pitched 0-10
+    degrees found its chin at the lower lip at 4 of 8 angles).
 
-    ``points``: (k, 3) canonical surface points of the whole head.
+    ``points``: (k, 3) canonical surface points of the whole head; ``length`` the head's
+    length (:func:`.joints.head_length`), ``top`` its highest point.
     """
     mid = points[np.abs(points[:, 0]) < strip]
     if len(mid) < 20:
         return None
-    head = mid[mid[:, 1] > neck_height]  # a bust's chest can stand further forward than the nose
+    # a bust's chest can stand further forward than the nose: the tip is sought above the
+    # level of the mouth (vertex-pronasale about 0.65 head lengths, the chest below 1.3)
+    head = mid[mid[:, 1] > top - TIP_FLOOR * length]
     if len(head) == 0:
         return None
     tip_y = head[np.argmax(head[:, 2]), 1]
@@ -308,6 +319,6 @@ def _chin_height(points, neck_height, head_depth, top, strip=0.03, bin_size=0.01
     peak = (drop >= 0.04) & (drop >= np.r_[0, drop[:-1]]) & (drop >= np.r_[drop[1:], 0])
     if not peak.any():
         return None
-    expected = top - 1.2 * head_depth
+    expected = top - 1.2 * length
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
     return float(ends[np.argmin(np.abs(ends - expected))])
