@@ -23,7 +23,10 @@ wrong one is 403, a file of the folder that is not a rig shown (or its sidecar) 
 """
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import stat
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -623,3 +626,20 @@ def api_cases():
                                                                      [[0.0, 0.0, 1.0]] * 2), "parents",
                                         "a bone that is its own parent"),
     }
+
+
+def snapshot(folder):
+    """Every entry under ``folder``, links not followed: a regular file's SHA-256, a link's target,
+    else its type (a FIFO is never opened). Two equal snapshots: nothing written, changed or added."""
+    out = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            p = os.path.join(root, name)
+            mode = os.lstat(p).st_mode
+            if stat.S_ISLNK(mode):
+                out[os.path.relpath(p, folder)] = "-> " + os.readlink(p)
+            elif stat.S_ISREG(mode):
+                out[os.path.relpath(p, folder)] = hashlib.sha256(Path(p).read_bytes()).hexdigest()
+            else:
+                out[os.path.relpath(p, folder)] = stat.S_IFMT(mode)
+    return out

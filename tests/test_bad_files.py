@@ -1,6 +1,5 @@
 """Hostile file arguments and one-line errors (issue #33): every case of ``bad_inputs.command_cases``
 through the CLI as a subprocess, and the bounded reader of ``autobones.io.files`` on its own."""
-import hashlib
 import json
 import os
 import stat
@@ -39,29 +38,17 @@ def transferred_rig(tmp_path_factory):
     return folder / "robot.glb"
 
 
-def _snapshot(folder):
-    """Every entry under ``folder``: a regular file's SHA-256, else its type (a FIFO is never opened)."""
-    out = {}
-    for root, dirs, files in os.walk(folder):
-        for name in dirs + files:
-            p = os.path.join(root, name)
-            mode = os.lstat(p).st_mode
-            out[os.path.relpath(p, folder)] = (hashlib.sha256(open(p, "rb").read()).hexdigest()
-                                               if stat.S_ISREG(mode) else stat.S_IFMT(mode))
-    return out
-
-
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_command_case_is_one_line_exit_2_nothing_written(tmp_path, placed_rig, transferred_rig, name):
     args = bad_inputs.write_command_case(tmp_path, name, placed_rig, transferred_rig)
     case = CASES[name][2]
-    before = _snapshot(tmp_path)
+    before = bad_inputs.snapshot(tmp_path)
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("AUTOBONES_MAX_FILE_MB", None)
     # a FIFO must be refused, not waited on: 60 s is far beyond any case's own time (~1-3 s)
     try:
         r = subprocess.run(CLI + args, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
-        after = _snapshot(tmp_path)
+        after = bad_inputs.snapshot(tmp_path)
     finally:
         for p in tmp_path.iterdir():  # the 126 MB capture is not kept in pytest's last three temp folders
             if p.is_file() and os.stat(p).st_blocks * 512 > 8 * 1024**2:

@@ -4,11 +4,9 @@
 The heads are four small robot heads (1.3k vertices each, ~1 s a rig at ``--density sparse``): the
 kill and race tests need a batch that runs for several seconds, not a large one.
 """
-import hashlib
 import json
 import os
 import signal
-import stat
 import subprocess
 import sys
 import time
@@ -18,6 +16,7 @@ import pytest
 
 from autobones.batch import REPORT_NAME
 from autobones.errors import AutobonesError
+from bad_inputs import snapshot
 from shared_data import ROOT, data
 
 CLI = [sys.executable, "-m", "cli.main"]
@@ -32,22 +31,6 @@ def _env():
 
 def run(args, **kw):
     return subprocess.run(CLI + args, cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=600, **kw)
-
-
-def snapshot(folder):
-    """Every entry under ``folder`` (links not followed): a file's SHA-256, a link's target, else its type."""
-    out = {}
-    for root, dirs, files in os.walk(folder):
-        for name in dirs + files:
-            p = os.path.join(root, name)
-            mode = os.lstat(p).st_mode
-            if stat.S_ISLNK(mode):
-                out[os.path.relpath(p, folder)] = "-> " + os.readlink(p)
-            elif stat.S_ISREG(mode):
-                out[os.path.relpath(p, folder)] = hashlib.sha256(Path(p).read_bytes()).hexdigest()
-            else:
-                out[os.path.relpath(p, folder)] = stat.S_IFMT(mode)
-    return out
 
 
 def outputs(folder):

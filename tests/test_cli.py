@@ -41,7 +41,10 @@ def test_place_with_no_argument_rigs_the_default_head(tmp_path):
 
 
 def test_place_density_output_and_verbose(tmp_path):
-    r = run(["place", str(data("misc/goathead.obj")), "--density", "12", "-o", "goat.glb", "-v"], tmp_path)
+    # the goat's frame as the user gives it: found from its shape alone it comes out upside down
+    # (test_orient's strict xfail, benchmarks/frames.py), and --up/--front is the documented recourse
+    r = run(["place", str(data("misc/goathead.obj")), "--density", "12", "-o", "goat.glb", "-v",
+             "--up", "+y", "--front", "-x"], tmp_path)
     assert r.returncode == 0, r.stderr
     assert sorted(os.listdir(tmp_path)) == ["goat.glb", "goat.rig.json", "goat.weights.npz"]
     assert "up +y" in r.stdout and "front -x" in r.stdout

@@ -198,11 +198,15 @@ def test_open_jaw_target_face_and_neck_stay_in_place(ict_rigged):
     # measured (mean / p95 % of ex-ex): face 1.35 / 5.8 (no prior 2.5 / 9.7), neck 0.75 / 2.8 (3.5 / 8.8);
     # 1.53 / 7.2 and 1.16 / 4.0 before the mouth interior's floor went with the jaw (jaw.inner_mouth_sides),
     # 1.33 / 5.9 and 1.04 / 3.0 before the prior glided the jaw as it turns (the definitions' jaw_glide);
-    # the jaw opened 20.2 degrees (ICT's lower teeth turn 25.3 about a pivot 2.5 cm from the rig's)
+    # the jaw opened 20.2 degrees (ICT's lower teeth turn 25.3 about a pivot 2.5 cm from the rig's).
+    # Since transfer's neck step (rig_transfer/neck.py: the head share through the head joint, under
+    # the chin) the prior read off this transferred rig has jaw weights up to 0.3 different near the
+    # menton: face 1.29 / 5.2, neck 0.95 / 3.65 (no prior 3.3 / 9.4 and 4.8 / 9.0); the built-in
+    # rig's own prior, which transfer uses, is not touched by that step
     p, n = err["prior"], err["none"]
     assert 15.0 < p["angle"] < 25.0, err
     assert p["face"][0] < 1.6 and p["face"][1] < 7.0, err
-    assert p["neck"][0] < 1.0 and p["neck"][1] < 3.4, err
+    assert p["neck"][0] < 1.0 and p["neck"][1] < 3.8, err
     assert p["face"][1] < 0.85 * n["face"][1] and p["neck"][1] < 0.6 * n["neck"][1], err
 
 
