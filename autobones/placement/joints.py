@@ -43,9 +43,12 @@ vertex, 0.32-0.35 of the section's depth (0.39-0.44 of its width) in front of th
 (the default head, the SMPL man and woman, ICT identities 000-002 with the tragions of
 ``tests/landmarks``): Chancey's centre lies 0.695-0.788 of the head's length below the vertex (ICT's
 taller crania 0.78-0.79) and 0.26-0.31 of the section's depth from its back; with 0.69 / 0.34 ICT's
-pivots sat 0.21-0.23 ex-ex off (0.20-0.22 too high). The constants below (0.73 / 0.30) put all six
-within 0.016-0.128 ex-ex (the SMPL man's 0.010 -> 0.114): one head length's proportion cannot fit
-every cranium closer; the ears would.
+pivots sat 0.21-0.23 ex-ex off (0.20-0.22 too high); 0.73 / 0.30 put all six within 0.016-0.128
+ex-ex in the frames of the time. Once the frame was a function of the shape alone (ICT's heads
+0.4-0.7 deg from their landmarks' frame, 6 deg before), the same six measured 0.71-0.82 of the
+length down (ICT 0.80-0.82) and 0.26-0.35 back; 0.77 / 0.30 put the five heads that are not face
+masks within 0.087-0.133 ex-ex (benchmarks/README.md, joints.py): one head length's proportion
+cannot fit every cranium closer; the ears would.
 """
 from __future__ import annotations
 
