@@ -91,7 +91,7 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         to ``CHIN_MARGIN`` under that point (its slope kept between 0.3 and 2); default slope 1.
     face_only : bool
         A face-only mesh: its face turns with the head down to its lowest vertices (the chin of a
-        mask); a neck below the face still keeps its base still.
+        mask, when ``chin`` is not above the neck base); a neck below the chin keeps its base still.
     face : (n,) float, optional
         1 on the facial mask falling to 0 across its band: the face turns with the head wherever
         it hangs (a long muzzle below any boundary through the pivot).
@@ -135,11 +135,14 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
             rise = rise * smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
     share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
     if face is not None:
-        # a face-only mesh's lowest vertices are its chin, which turns with the head; a neck's base
-        # is still even where the face's band reaches it
-        if not face_only and keep_chin and chin is not None:
+        # a face-only mesh's lowest vertices are its chin, which turns with the head, unless a neck
+        # hangs below the chin (James' scan runs 0.18 of its height further down: its face's band
+        # reached the neck's base and a head turn moved it 3.8% of the peak); a neck's base is still
+        # even where the face's band reaches it
+        whole = face_only and (chin is None or chin[0] - CHIN_MARGIN <= base)
+        if not whole and keep_chin and chin is not None:
             rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
-        share = np.maximum(share, face if face_only else face * rise)
+        share = np.maximum(share, face if whole else face * rise)
     return share
 
 

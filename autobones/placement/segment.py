@@ -28,7 +28,7 @@ from scipy.cluster.hierarchy import fcluster
 from ..geometry.head_share import face_only, neck_base_height
 from ..geometry.sample import sample_surface
 from ..geometry.topology import used_vertices
-from .joints import Joints, find_joints, head_length, height_profile
+from .joints import MASK_CHIN, Joints, find_joints, head_length, height_profile
 
 JOINT_SAMPLES = 16000
 CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's length is read in
@@ -130,13 +130,18 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     # the chin of ICT's head)
     Vm = V[used_vertices(F, len(V))]
     profile = np.vstack([S, Vm[np.abs(Vm[:, 0]) < 0.03]])
-    found = _chin_height(profile, length, top)
+    mask = face_only(V, F)
+    # a face mask's chin lies at least MASK_CHIN of its height below its top (a step higher up is its
+    # nose or lips): its depth is no cranium's length to expect the chin from (James' scan, which runs
+    # down the neck, took the lips for its chin, and the joints then scaled the pivot by the whole scan)
+    lowest = MASK_CHIN * float(np.ptp(Vm[:, 1])) if mask else None
+    found = _chin_height(profile, length, top, below_top=lowest)
     for h, is_chin in ((found, True), (neck_height, False)):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
         if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
             cut, chin = h, (h if is_chin else None)
             break
-    joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean)
+    joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask)
     neck = V[:, 1] < cut
     return HeadSegmentation(
         labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
@@ -144,16 +149,17 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
         head_bone=head_bone, neck_bone=neck_bone, chin_height=chin, joints=joints)
 
 
-def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean):
+def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask):
     """The head pivot and the neck base (:func:`.joints.find_joints`) as bones kept inside the volume.
 
     The head bone runs vertically from the pivot to 0.8 of the way to the top of the head, the neck
     bone from the neck base to the pivot. ``Vm``: the used vertices; ``head_mean`` and ``neck_mean``
-    (the depth groups' upper and lower middle means) anchor the pull back inside."""
+    (the depth groups' upper and lower middle means) anchor the pull back inside; ``mask``: the mesh
+    is a face mask (:func:`autobones.geometry.head_share.face_only`)."""
     # a larger sample than the clustering's: the profile's 2% slabs and 12% midline strip need some
     # tens of points each, and sampling is linear in the mesh
     P, _, _ = sample_surface(V, F, JOINT_SAMPLES, seed=seed)
-    found = find_joints(P, float(Vm[:, 1].min()), float(Vm[:, 1].max()), chin=chin, face_mask=face_only(V, F),
+    found = find_joints(P, float(Vm[:, 1].min()), float(Vm[:, 1].max()), chin=chin, face_mask=mask,
                         base=neck_base_height(Vm[:, 1]))
     joint, neck_root = found.head.copy(), found.neck.copy()
     top = Vm[:, 1].max()
@@ -280,7 +286,7 @@ def _carry(sample_value, sample_label, value):
     return np.where(left_closer, sl[i - 1], sl[i])
 
 
-def _chin_height(points, length, top, strip=0.03, bin_size=0.01):
+def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01):
     """Height of the menton, or None if no chin step is found.
 
     Below the nose tip, the midline front profile of the head steps back
@@ -292,7 +298,8 @@ def _chin_height(points, length, top, strip=0.03, bin_size=0.01):
     degrees found its chin at the lower lip at 4 of 8 angles).
 
     ``points``: (k, 3) canonical surface points of the whole head; ``length`` the head's
-    length (:func:`.joints.head_length`), ``top`` its highest point.
+    length (:func:`.joints.head_length`), ``top`` its highest point; ``below_top``: when given,
+    only steps at least this far below ``top`` count (a face mask's).
     """
     mid = points[np.abs(points[:, 0]) < strip]
     if len(mid) < 20:
@@ -321,4 +328,8 @@ def _chin_height(points, length, top, strip=0.03, bin_size=0.01):
         return None
     expected = top - 1.2 * length
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
+    if below_top is not None:
+        ends = ends[top - ends >= below_top]
+        if len(ends) == 0:
+            return None
     return float(ends[np.argmin(np.abs(ends - expected))])
