@@ -54,10 +54,6 @@ BOUND = 0.15          # ex-ex: occiput-C1 and condyle (humans)
 COLUMNS = ("P head", "T head", "T jaw", "P mid", "T mid", "P neck", "P zone", "T zone")
 
 
-def log(msg):
-    print(msg, file=sys.stderr, flush=True)
-
-
 def heads(data):
     """name -> (mesh path, landmarks with the added tragions): zoo.py's landmarked heads."""
     out = {}
@@ -66,12 +62,18 @@ def heads(data):
             lm_path = zoo.TESTS_LM / f"{name}.landmarks.json"
             if not lm_path.exists():
                 continue
-        lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(lm_path).items()}
-        extra = zoo.TESTS_LM / f"{name}.tragions.json"
-        if extra.exists() and "tragion_l" not in lm:
-            lm.update({n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(extra).items()})
-        out[name] = (mesh, lm)
+        out[name] = (mesh, with_tragions(read_landmarks(lm_path), name))
     return out
+
+
+def with_tragions(landmarks, name):
+    """``landmarks`` as float arrays, with the tragions of ``tests/landmarks/NAME.tragions.json`` added
+    where they have none."""
+    lm = {n: np.asarray(p, dtype=np.float64) for n, p in landmarks.items()}
+    extra = zoo.TESTS_LM / f"{name}.tragions.json"
+    if extra.exists() and "tragion_l" not in lm:
+        lm.update({n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(extra).items()})
+    return lm
 
 
 def targets(lm, ref, u):
@@ -79,9 +81,7 @@ def targets(lm, ref, u):
     if "tragion_l" not in lm or "tragion_r" not in lm:
         return None, None
     mid = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
-    mm = u / zc.EXEX_MM
-    c1 = mid + mm * (-zc.C1_MM[0] * ref["front"] - zc.C1_MM[1] * ref["up"])
-    return c1, mid + mm * CONDYLE_MM * ref["front"]
+    return zc.c1_centre(mid, u, ref), mid + (u / zc.EXEX_MM) * CONDYLE_MM * ref["front"]
 
 
 def joint(rig, name):
@@ -127,11 +127,11 @@ def run_head(name, mesh, lm, variants):
         for label, err in (("P", perr), ("T", terr)):
             if err is not None:
                 found[vname][f"{label} error"] = err.text
-        log(f"  {name} {vname}: {time.perf_counter() - t:.1f} s")
+        zoo.log(f"  {name} {vname}: {time.perf_counter() - t:.1f} s")
     return found
 
 
-def worst(found, key, better=min):
+def worst(found, key):
     """(as-is value, (worst value, its variant)) of a float figure over the copies."""
     vals = [(v[key], k) for k, v in found.items() if v.get(key) is not None]
     if not vals:
@@ -212,7 +212,7 @@ def main(argv=None):
     for name in names:
         mesh, lm = known[name]
         human = name in zoo.HUMAN
-        log(f"{name}")
+        zoo.log(f"{name}")
         found = run_head(name, mesh, lm, args.variants.split(","))
         kind = ("human" if human else "animal/cartoon") + ("" if "tragion_l" in lm else ", no tragions")
         rows.append((name, kind, *(cell(found, c) for c in ("P head", "T head", "T jaw", "P mid", "T mid")),

@@ -301,6 +301,13 @@ def check_neck_base(rig, up, core, chin=None):
 
 
 # ------------------------------------------------------------------------------------- check 4
+def c1_centre(tragion, u, ref):
+    """The occiput-C1 centre of rotation (Chancey et al. 2007) from the tragions' midpoint ``tragion``
+    (3,): ``C1_MM`` behind and below it along the landmark frame ``ref``, millimetres scaled by the
+    head's ex-ex ``u`` / ``EXEX_MM``."""
+    return tragion + (u / EXEX_MM) * (-C1_MM[0] * ref["front"] - C1_MM[1] * ref["up"])
+
+
 def check_pivot(rig, lm, ref, core, human):
     """The head joint behind the gonions' line, below the tragions, above the neck's base, on the
     midline; on human heads with tragions its distance to the occiput-C1 centre (issue #32)."""
@@ -329,8 +336,7 @@ def check_pivot(rig, lm, ref, core, human):
     if d > MIDLINE:
         fails.append((f"off midline {d:.3f}", d / MIDLINE))
     if human and tragion is not None and "exocanthion_l" in lm:
-        C = tragion + (u / EXEX_MM) * (-C1_MM[0] * ref["front"] - C1_MM[1] * ref["up"])
-        d = float(np.linalg.norm(j - C)) / u
+        d = float(np.linalg.norm(j - c1_centre(tragion, u, ref))) / u
         if d > C1_MAX:
             fails.append((f"C1 {d:.2f}", d / C1_MAX))
     return Result.of(fails)

@@ -46,11 +46,7 @@ def head_landmarks(mesh, marks):
     """(V, F, landmarks with the tragions of tests/landmarks where the shared file has none)."""
     V, F = load_mesh(default_head_path() if mesh is None else DATA / mesh)
     path = ROOT / marks if marks.startswith("generic_rig/") else DATA / marks
-    lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(path).items()}
-    extra = ROOT / "tests" / "landmarks" / f"{Path(marks).name.split('.')[0]}.tragions.json"
-    if extra.exists() and "tragion_l" not in lm:
-        lm.update({n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(extra).items()})
-    return V, F, lm
+    return V, F, jb.with_tragions(read_landmarks(path), Path(marks).name.split(".")[0])
 
 
 def panel(title, mesh, marks, size):

@@ -179,9 +179,10 @@ def check_mesh(V, F, name="mesh", strays=False):
     if strays:
         body = stray_parts(V, F)
         used = used if body is None else np.intersect1d(used, body.index, assume_unique=True)
-    _check_scale(V[used], name)
+    U = V[used]   # one copy: a 1M-vertex scan's is 24 MB
+    _check_scale(U, name)
     _check_outliers(V, used, name)
-    extent = V[used].max(axis=0) - V[used].min(axis=0)
+    extent = U.max(axis=0) - U.min(axis=0)
     if extent.max() <= 0 or extent.min() < 1e-4 * extent.max():
         raise AutobonesError(f"{name}: the mesh is flat (extent {extent.tolist()}); a head has volume")
     _check_area(V, F, extent, name)
