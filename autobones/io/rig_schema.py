@@ -53,13 +53,23 @@ def is_number(x):
     return isinstance(x, numbers.Real) and not isinstance(x, bool)
 
 
+def _finite(x, key):
+    """``x`` (a number) as a float, SchemaError naming ``key`` when not finite: JSON's whole numbers
+    have no bound, and ``float(10**400)`` raises OverflowError instead of giving inf."""
+    try:
+        x = float(x)
+    except OverflowError:
+        raise SchemaError(f"{key} is a whole number too large for a float, not a finite number") from None
+    if not math.isfinite(x):
+        raise SchemaError(f"{key} is {x}, not a finite number")
+    return x
+
+
 def number(x, key, low=None, high=None, above=None):
     """``x`` as a finite float in ``[low, high]`` (and ``> above``); SchemaError naming ``key`` otherwise."""
     if not is_number(x):
         raise SchemaError(f"{key} is {_kind(x)}, not a number")
-    x = float(x)
-    if not math.isfinite(x):
-        raise SchemaError(f"{key} is {x}, not a finite number")
+    x = _finite(x, key)
     if (low is not None and x < low) or (high is not None and x > high) or (above is not None and x <= above):
         bounds = f"> {above:g}" if above is not None else f"in [{low:g}, {high:g}]" if high is not None else f">= {low:g}"
         raise SchemaError(f"{key} is {x:g}, expected a number {bounds}")
@@ -118,8 +128,8 @@ def check_finite_tree(x, key):
             stack.extend((vv, f"{k}.{kk}") for kk, vv in v.items())
         elif isinstance(v, (list, tuple)):
             stack.extend((vv, f"{k}[{i}]") for i, vv in enumerate(v))
-        elif is_number(v) and not math.isfinite(float(v)):
-            raise SchemaError(f"{k} is {float(v)}, not a finite number")
+        elif is_number(v):
+            _finite(v, k)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -166,8 +176,9 @@ def check_int_list(values, key, low, high, n=None):
     if not all(isinstance(v, int) and not isinstance(v, bool) for v in values):
         bad = next(v for v in values if not isinstance(v, int) or isinstance(v, bool))
         raise SchemaError(f"{key} holds {_kind(bad)}, expected whole numbers")
-    if len(values) and (min(values) < low or max(values) > high):  # Python ints: 10**30 is refused, not wrapped
-        bad = min(values) if min(values) < low else max(values)
+    lo, hi = (min(values), max(values)) if len(values) else (low, high)
+    if lo < low or hi > high:  # Python ints: 10**30 is refused, not wrapped
+        bad = lo if lo < low else hi
         raise SchemaError(f"{key} holds {str(bad)[:24]}, expected whole numbers in [{low}, {high}]")
     return np.asarray(values, dtype=np.int64)
 
