@@ -357,3 +357,15 @@ def test_schema_refuses_what_autobones_never_writes(placed_rig):
     defs["model"]["smoothing"] = float("nan")  # a dict through the API never passed the JSON reader
     with pytest.raises(SchemaError, match="definitions.model.smoothing is nan"):
         check_definitions(defs, MODEL_DEFAULTS)
+
+
+def test_schema_refuses_a_whole_number_past_float_range():
+    """JSON's whole numbers have no bound: 10**400 in definitions or a sidecar is one SchemaError naming
+    its key (float() raised OverflowError, a traceback, where 1e400 was refused)."""
+    from autobones.io.rig_schema import SchemaError, check_finite_tree, number
+
+    with pytest.raises(SchemaError, match=r"defs\.a\[1\] is a whole number too large"):
+        check_finite_tree({"a": [1, 10 ** 400]}, "defs")
+    with pytest.raises(SchemaError, match="head_size is a whole number too large"):
+        number(10 ** 400, "head_size")
+    assert number(3, "n") == 3.0
