@@ -102,6 +102,20 @@ def base_score(cues, up):
     return float(flat_part + 0.05 * rim_part)
 
 
+def cap_score(cues, up, depth=0.02, tilt=15.0):
+    """How much of the surface is a flat cap at the far end of ``-up``: the area of the faces facing
+    ``-up`` within ``tilt`` degrees and lying within ``depth`` of the height from the lowest vertex,
+    over the whole area. A closed bust's base (a plane capping the cut) has no open rim for
+    :func:`base_score` to see, and its flat-facing area alone can be matched by a long flat slope
+    elsewhere (the goat's nose bridge: 0.055 against its base's 0.044); a cap lies all at one level,
+    at the extreme (the goat's base 0.042, any other direction of it or of the zoo's heads 0.00-0.03)."""
+    h_v = cues["heights"] @ up
+    lo, hi = h_v.min(), h_v.max()
+    bottom = (cues["centroid"] @ up - lo) / max(hi - lo, 1e-300) < depth
+    flat = (cues["normal"] @ -up) > np.cos(np.radians(tilt))
+    return float(cues["area2"][bottom & flat].sum() / max(cues["area2"].sum(), 1e-300))
+
+
 def is_planar_cut(cues, min_length=0.5, max_flatness=0.12):
     """Whether the main rim loop is a planar cut long enough to be a neck cut or a bust base: at
     least ``min_length`` times the square root of the surface's area (the zoo's neck cuts: 0.9-3.2,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cut_cues import base_score, is_planar_cut, open_shell_facing
+from .cut_cues import base_score, cap_score, is_planar_cut, open_shell_facing
 from .errors import AutobonesError
 
 # vector area / area of an open surface (cut_cues.open_shell_facing): above OPEN_SHELL a clear cut
@@ -22,6 +22,11 @@ FACE_SHELL = 0.4
 # ups closer than this are neighbours on the circle of candidates (30 degrees apart): a cut clear at
 # one up shows at its neighbours too, so an up is "clearly" cut against the ups beyond it
 NEIGHBOUR = float(np.cos(np.radians(45.0)))
+# a closed mesh's flat cap (cut_cues.cap_score) marks its bottom when it covers this share of the
+# surface and this many times any up beyond its neighbours (the goat's base: 0.042 against 0.005)
+CAP_MIN = 0.02
+CAP_RATIO = 4.0
+CAP_SPREAD = 3    # steps of 5 degrees: a cap's own score spreads over its tilt (15 degrees) either side
 
 
 def shape_candidates(P, normal, cues, steps=12):
@@ -68,6 +73,35 @@ def _rival(ups, score, against):
     return max(far, default=0.0)
 
 
+def _capped(ups, cues, normal, steps=72):
+    """The candidate ups (keys of ``ups``) nearest the directions whose far ends are flat caps (a
+    closed bust's base, and a back cut flat too: :func:`autobones.cut_cues.cap_score`) when they
+    clearly are; else []. Caps are looked for ``steps`` directions round the symmetry plane (unit
+    ``normal``; a symmetric head's base faces along its midplane): the candidates, 30 degrees
+    apart, can miss a cap's own direction by 15 degrees, and the cap then drops out of the tilt it
+    is measured within. A cap is a peak of the score round the circle above ``CAP_MIN``; the two
+    highest count, and they are clear when the highest is ``CAP_RATIO`` times every direction
+    more than ``CAP_SPREAD`` steps from both (the goat's base 0.042 and its back 0.028, 40 degrees
+    apart, against at most 0.010 elsewhere)."""
+    a = np.array(ups[0]) - (np.array(ups[0]) @ normal) * normal
+    a /= np.linalg.norm(a)
+    b = np.cross(normal, a)
+    t = np.radians(np.arange(steps) * 360.0 / steps)
+    dirs = np.cos(t)[:, None] * a + np.sin(t)[:, None] * b
+    cap = np.array([cap_score(cues, d) for d in dirs])
+    peak = (cap > CAP_MIN) & (cap >= np.roll(cap, 1)) & (cap > np.roll(cap, -1))
+    found = sorted(np.flatnonzero(peak), key=lambda i: -cap[i])[:2]   # stable: ties keep the order
+    if not found:
+        return []
+    step = np.arange(steps)
+    far = np.ones(steps, dtype=bool)
+    for i in found:
+        far &= np.minimum((step - i) % steps, (i - step) % steps) > CAP_SPREAD
+    if cap[found[0]] <= CAP_RATIO * cap[far].max(initial=0.0):
+        return []
+    return [max(ups, key=lambda k: np.array(k) @ dirs[i]) for i in found]
+
+
 def front_part(ref, depth):
     """The canonical reference sample ``ref`` cut to its front part ``depth`` head widths deep (all of
     it when that leaves less than a tenth)."""
@@ -95,7 +129,10 @@ def cut_candidates(P, normal, candidates, cues, ref):
     top = ups[0]
     second = _rival(ups, score, [top])
     winner = top if score[top] > 0.02 and score[top] > 2.0 * second else None
+    capped = [] if winner is not None or len(cues["rim_length"]) else _capped(ups, cues, normal)
     near = lambda keys: [(u, f) for u, f in candidates if max(u @ np.array(k) for k in keys) >= NEIGHBOUR]
+    if capped:   # a closed mesh has no opening: the face-only test below never holds for it
+        return near(capped), ref, False
     # a shell open that wide whose cut lies behind the way it faces: a clear base score, or the planar
     # main loop's far side (12 ups 30 degrees apart share a cut between neighbours, and a shallow
     # capture's rim shows at every end: Lee Perry-Smith's front quarter, 0.129 against 0.068)

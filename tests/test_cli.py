@@ -41,8 +41,8 @@ def test_place_with_no_argument_rigs_the_default_head(tmp_path):
 
 
 def test_place_density_output_and_verbose(tmp_path):
-    # the goat's frame as the user gives it: found from its shape alone it comes out upside down
-    # (test_orient's strict xfail, benchmarks/frames.py), and --up/--front is the documented recourse
+    # the goat's frame as the user gives it (found from its shape alone it is the same: test_orient's
+    # closed bust), so --up/--front, the documented recourse, is exercised
     r = run(["place", str(data("misc/goathead.obj")), "--density", "12", "-o", "goat.glb", "-v",
              "--up", "+y", "--front", "-x"], tmp_path)
     assert r.returncode == 0, r.stderr
