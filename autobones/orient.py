@@ -13,8 +13,9 @@ Method
    itself best wins.
 2. Up and front: 12 ups round the symmetry plane, from the main cut's far side or the sample's own
    longest in-plane axis (:mod:`autobones.frame_candidates`), each with both fronts. When one
-   direction clearly has a cut at its far end (a flat base or an open rim: neck cut, bust base), it
-   and its neighbours are down -- unless the mesh is a face-only capture: an open shell faces away
+   direction clearly has a cut at its far end (a flat base or an open rim: neck cut, bust base; on a
+   closed mesh, flat caps all at one level, :func:`autobones.cut_cues.cap_score`), it and its
+   neighbours are down -- unless the mesh is a face-only capture: an open shell faces away
    from its opening, which is then its back, and only the fronts along that way stay. The remaining
    choices are scored by how well the head's top slice overlays the same slice of a reference head
    (:mod:`autobones.reference_overlay`: a trimmed similarity ICP that may turn by at most 35
