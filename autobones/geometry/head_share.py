@@ -121,7 +121,7 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     base = min(neck_base_height(used, neck_base), yj - 1e-6)
     slope = 1.0
     if chin is not None:
-        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), 0.3, 2.0))
+        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), -2.0, 2.0))
     # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
     boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)

@@ -33,6 +33,8 @@ from .joints import MASK_CHIN, Joints, find_joints, head_length, height_profile
 JOINT_SAMPLES = 16000
 CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's length is read in
 TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (module _chin_height)
+JAW_FRONT = 0.1       # head sizes: a long head's chin step starts at most this far behind the nose tip
+THROAT = 0.18         # head sizes: a step starting further behind the nose tip is a throat's (human chins 0.07-0.16)
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")
@@ -328,8 +330,20 @@ def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01)
         return None
     expected = top - 1.2 * length
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
+    back = front[0] - front[peak]   # how far behind the nose tip each step starts
     if below_top is not None:
-        ends = ends[top - ends >= below_top]
+        keep = top - ends >= below_top
+        ends, back = ends[keep], back[keep]
         if len(ends) == 0:
             return None
-    return float(ends[np.argmin(np.abs(ends - expected))])
+    pick = int(np.argmin(np.abs(ends - expected)))
+    if expected < points[:, 1].min() and back[pick] > THROAT:
+        # a head long, not tall (a snout): its length is no cranium's, the chin it expects lies
+        # below the mesh, and the step nearest that starts far behind the face: a throat's or the
+        # neck cut's (the cow's chin was taken 0.24 head sizes under its menton). A lower jaw ends
+        # under the face: the highest step that starts within JAW_FRONT of the nose tip (the zoo's
+        # animals' jaws 0.03-0.06 behind it, their throats 0.19-0.44; human chins 0.07-0.16)
+        jaw = back <= JAW_FRONT
+        if jaw.any():
+            return float(ends[jaw].max())
+    return float(ends[pick])
