@@ -42,7 +42,11 @@ def collect(obj):
     contract order."""
     found = landmark_empties(obj)
     to_local = obj.matrix_world.inverted()
-    return {n: tuple(to_local @ found[n].matrix_world.translation) for n in landmark_names() if n in found}
+
+    def local(empty):  # a child's own matrix needs no round trip through the world (float32) frame
+        return empty.matrix_local.translation if empty.parent == obj else to_local @ empty.matrix_world.translation
+
+    return {n: tuple(local(found[n])) for n in landmark_names() if n in found}
 
 
 def head_size(obj):

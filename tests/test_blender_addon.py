@@ -1,0 +1,224 @@
+"""The Blender add-on (issue #37): its zip installs in Blender 3.4 and its operators rig a head in the scene.
+
+One headless Blender run (tests/blender_addon_check.py, ~25 s) installs the zip that
+``autobones blender-addon`` writes, enables it, rigs the built-in default head with ``place`` and
+then ``transfer`` (landmark file, ``--arkit``), then the same head in millimetres and +Z up, moved and
+scaled in the scene, with landmarks placed as empties by the add-on's operator; every result is
+compared here with the files autobones wrote (read by autobones' own readers, not the add-on's).
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+HEAD = ROOT / "generic_rig" / "default_head.obj"
+LANDMARKS = ROOT / "generic_rig" / "default_head.landmarks.json"
+RUNS = {"a_place": "head", "a_transfer": "head", "b_place": "head_mm", "b_transfer": "head_mm"}
+TO_B = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]]) * 1000.0  # the head as given -> millimetres, +Z up
+pytestmark = pytest.mark.slow
+
+
+def _cli(args, cwd):
+    """``autobones ARGS`` run in a subprocess from ``cwd``: CompletedProcess (text)."""
+    return subprocess.run([sys.executable, "-m", "autobones", *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True, timeout=120)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """(out folder, report dict, Blender's log) of one Blender run of tests/blender_addon_check.py."""
+    blender = shutil.which("blender")
+    if blender is None:
+        pytest.fail("blender is not on PATH; install it with: apt-get install blender python3-numpy "
+                    "(or bash tools/test-setup.sh)")
+    work = tmp_path_factory.mktemp("blender_addon")
+    made = _cli(["blender-addon", "-o", "autobones_blender.zip"], work)
+    assert made.returncode == 0, made.stderr
+    out, scripts = work / "out", work / "user_scripts"
+    out.mkdir()
+    # Debian's Blender finds its Python's standard library through the first python3.X on PATH (see
+    # autobones/export/fbx.py); the user's scripts folder is a temporary one: nothing installed for real
+    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(scripts),
+               PATH=os.path.dirname(os.path.realpath(blender)) + os.pathsep + os.environ.get("PATH", ""))
+    run = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P",
+                          str(ROOT / "tests" / "blender_addon_check.py"), "--", str(work / "autobones_blender.zip"),
+                          sys.executable, str(HEAD), str(LANDMARKS), str(out)],
+                         capture_output=True, text=True, timeout=600, env=env)
+    log = run.stdout + run.stderr
+    assert run.returncode == 0, log[-3000:]
+    assert (scripts / "addons" / "autobones_blender" / "__init__.py").is_file()  # installed from the zip
+    with open(out / "report.json") as fh:
+        return out, json.load(fh), log
+
+
+def _rig(out, run):
+    """(what Blender made: npz dict, the files autobones wrote: RigSource)."""
+    from autobones.export.source import read_rig_source
+
+    with np.load(out / f"{run}.npz") as z:
+        got = {k: z[k] for k in z.files}
+    return got, read_rig_source(out / run / f"{RUNS[run]}.glb")
+
+
+@pytest.mark.parametrize("run", list(RUNS))
+def test_the_rig_in_blender_is_the_rig_autobones_wrote(scene, run):
+    out, report, log = scene
+    assert report["results"][run] == ["FINISHED"]
+    got, src = _rig(out, run)
+    rig, size = src.rig, float(src.rig.frame.size)
+    names = [str(s) for s in got["bone_names"]]
+    assert names == src.joint_names
+    parents = [str(p) for p in got["parents"]]
+    assert parents == [src.joint_names[p] if p >= 0 else "" for p in src.parents]
+    # bones where autobones put them, in the mesh's own frame, with the glb joints' own axes
+    assert np.abs(got["heads"] - rig.skeleton.heads).max() <= 1e-6 * size
+    assert np.abs(got["tails"] - rig.skeleton.tails).max() <= 1e-6 * size
+    assert np.abs(got["x_axes"] - src.world[:, :3, 0]).max() <= 1e-4
+    assert np.abs(got["y_axes"] - src.world[:, :3, 1]).max() <= 1e-4
+    # every weight of the sidecar (not the glb's four), one vertex group per bone
+    assert got["weights"].shape == rig.weights.shape
+    assert np.abs(got["weights"] - rig.weights).max() <= 1e-6
+    assert (rig.weights > 0).sum(axis=1).max() > 4 or run.endswith("transfer")
+    assert set(names) <= {str(g) for g in got["group_names"]}
+    # a shape key per morph target, under its name, with the glb's offsets
+    assert [str(s) for s in got["shape_key_names"]] == [n for n, _ in src.morph_targets]
+    assert len(src.morph_targets) == (52 if run.endswith("transfer") else 0)
+    for delta, (name, want) in zip(got["shape_key_deltas"], src.morph_targets):
+        assert np.linalg.norm(delta - want, axis=1).max() <= 1e-6 * size, name
+    # on the same object, at rest, and the sidecar kept
+    made = report["made"][run]
+    assert made["armature_parent"] == made["mesh"] == RUNS[run] and made["armature_parent_type"] == "OBJECT"
+    assert made["modifier_object"] == f"{RUNS[run]}_rig" and made["modifier_index"] == 0
+    assert made["armatures_in_scene"] == (1 if run.startswith("a") else 2)  # rigging again replaced the rig
+    assert made["sidecar_text"] == (out / run / f"{RUNS[run]}.rig.json").read_text()
+    assert np.abs(got["rest"] - got["mesh"]).max() <= 1e-6 * size
+    assert np.abs(got["mesh"] - rig.vertices).max() <= 1e-6 * size  # vertex order and values kept
+
+
+@pytest.mark.parametrize("run", list(RUNS))
+def test_turning_head_20_degrees_moves_the_head_and_not_the_neck_base(scene, run):
+    out, report, _ = scene
+    got, src = _rig(out, run)
+    rig, size = src.rig, float(src.rig.frame.size)
+    names = list(src.joint_names)
+    up = rig.skeleton.heads[names.index("head")] - rig.skeleton.heads[names.index("neck")]
+    height = got["mesh"] @ (up / np.linalg.norm(up))
+    moved = np.linalg.norm(got["turned"] - got["rest"], axis=1)
+    top = int(np.argmax(height))
+    pivot = rig.skeleton.heads[names.index("head")]
+    rigid = 2 * np.sin(np.radians(10)) * np.linalg.norm(got["mesh"][top] - pivot)  # a chord of 20 degrees
+    assert moved[top] >= 0.95 * rigid * rig.weights[top, names.index("head"):].sum()
+    assert moved[top] >= 0.1 * size
+    base = height <= height.min() + 0.02 * (height.max() - height.min())  # the neck's cut, 2% of the height
+    assert base.sum() >= 20
+    assert moved[base].max() <= 1e-6 * size
+    assert np.abs(got["after_reset"] - got["mesh"]).max() <= 1e-6 * size  # autobones.reset_pose
+
+
+def test_the_millimetre_z_up_head_gets_the_same_rig_sitting_on_it(scene):
+    out, _, _ = scene
+    for kind in ("place", "transfer"):
+        got_a, src_a = _rig(out, f"a_{kind}")
+        got_b, src_b = _rig(out, f"b_{kind}")
+        assert src_b.joint_names == src_a.joint_names
+        size_a = float(src_a.rig.frame.size)
+        # the same bones on the same head: b's mapped back to a's frame and unit
+        back = got_b["heads"] @ np.linalg.inv(TO_B).T
+        assert np.linalg.norm(back - got_a["heads"], axis=1).max() <= 0.01 * size_a, kind
+        # and on the mesh in the scene: every joint inside the moved, scaled head's world bounding box
+        M = got_b["matrix_world"]
+        world = got_b["heads"] @ M[:3, :3].T + M[:3, 3]
+        skin = got_b["mesh"] @ M[:3, :3].T + M[:3, 3]
+        lo, hi = skin.min(axis=0), skin.max(axis=0)
+        assert ((world >= lo) & (world <= hi)).all(), kind
+        assert np.abs(M[:3, 3] - [0.4, 0.1, 0.0]).max() < 1e-6  # the object itself did not move
+
+
+def test_landmark_empties_are_snapped_named_and_written_for_autobones(scene):
+    from autobones.io.landmarks import NAMES, read_landmarks
+
+    out, report, _ = scene
+    assert report["written_landmarks"] == ["FINISHED"]
+    got, src = _rig(out, "b_transfer")
+    placed = dict(zip((str(s) for s in got["landmark_names"]), got["landmarks"]))
+    assert list(placed) == list(NAMES)
+    written = read_landmarks(out / "b.landmarks.json")  # autobones reads the file the operator wrote
+    assert sorted(written) == sorted(placed)
+    size = float(src.rig.frame.size)
+    for name, p in placed.items():  # Blender keeps positions in float32
+        assert np.abs(np.asarray(written[name]) - p).max() <= 1e-6 * size
+    with open(LANDMARKS) as fh:
+        given = json.load(fh)["landmarks"]
+    for name, p in given.items():  # clicked at the given points (on the skin): snapping keeps them there
+        assert np.linalg.norm(placed[name] - TO_B @ np.asarray(p)) <= 0.005 * size, name
+    # the transfer used exactly those, and its landmarks came back as the same empties
+    assert sorted(src.rig.landmarks) == sorted(placed)
+    for name, p in src.rig.landmarks.items():
+        assert np.linalg.norm(np.asarray(p) - placed[name]) <= 1e-6 * size
+
+
+def test_bad_input_is_one_line_in_blenders_report_never_a_traceback(scene):
+    _, report, log = scene
+    errors = report["errors"]
+    expected = {"no_active_mesh": "select a mesh object to rig",
+                "autobones_not_found": "autobones not found: ",
+                "autobones_not_on_path": "autobones not found on PATH",
+                "autobones_exit_2": "autobones transfer: error: ",
+                }
+    assert sorted(errors) == sorted(expected)
+    for key, words in expected.items():
+        message = errors[key].strip()
+        assert "\n" not in message and "Traceback" not in message, message
+        assert message.startswith("Error: ") and words in message, message
+    assert "at least 10" in errors["autobones_exit_2"]  # autobones' own one-line message
+    assert "Traceback" not in log and "Dependency cycle" not in log
+
+
+@pytest.fixture
+def cli(capsys, monkeypatch):
+    """Run ``autobones ARGS`` in this process from folder ``cwd``: (exit code, stdout, stderr)."""
+    from autobones.cli.main import main
+
+    def run(args, cwd):
+        monkeypatch.chdir(cwd)
+        capsys.readouterr()
+        code = main([str(a) for a in args])
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    return run
+
+
+def test_cli_writes_the_same_zip_every_time_and_refuses_a_bad_output(tmp_path, cli):
+    from autobones.io.landmark_names import NAMES
+
+    code, out, _ = cli(["blender-addon", "-o", "a.zip"], tmp_path)
+    assert code == 0 and out.startswith("a.zip: Blender add-on autobones_blender"), out
+    assert cli(["blender-addon", "-o", "a.zip"], tmp_path)[0] == 0  # an existing zip is replaced
+    data = (tmp_path / "a.zip").read_bytes()
+    (tmp_path / "b").mkdir()
+    assert cli(["blender-addon", "-o", "b/c.zip"], tmp_path)[0] == 0
+    assert (tmp_path / "b" / "c.zip").read_bytes() == data  # deterministic
+    with zipfile.ZipFile(tmp_path / "a.zip") as zf:
+        files = zf.namelist()
+        assert "autobones_blender/__init__.py" in files and "autobones_blender/operators.py" in files
+        assert all(f.startswith("autobones_blender/") and "__pycache__" not in f for f in files)
+        assert json.loads(zf.read("autobones_blender/landmark_names.json"))["names"] == list(NAMES)
+        assert b'"blender": (3, 4, 0)' in zf.read("autobones_blender/__init__.py")
+    (tmp_path / "notes.zip").write_text("my notes")
+    for target, words in (("notes.zip", "is not a zip file"), ("missing/a.zip", "does not exist"),
+                          ("addon.txt", "written as a .zip"), ("b", "written as a .zip")):
+        before = sorted(p.name for p in tmp_path.rglob("*"))
+        code, out, err = cli(["blender-addon", "-o", target], tmp_path)
+        assert code == 2 and out == "", (code, out, err)
+        assert err.count("\n") == 1 and err.startswith("autobones blender-addon: error: "), err
+        assert words in err, err
+        assert sorted(p.name for p in tmp_path.rglob("*")) == before  # nothing written
+    assert (tmp_path / "notes.zip").read_text() == "my notes"
