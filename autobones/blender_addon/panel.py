@@ -29,18 +29,25 @@ class AUTOBONES_PT_rig(_Sidebar, bpy.types.Panel):
                      icon="MESH_DATA")
         layout.prop(s, "method", expand=True)
         if s.method == "PLACE":
-            layout.prop(s, "density")
-        layout.prop(s, "landmarks")
+            _labelled(layout, "Density", s, "density")
+        _labelled(layout, "Landmarks", s, "landmarks")
         if s.landmarks == "FILE":
             layout.prop(s, "landmarks_file", text="")
         elif s.landmarks == "EMPTIES" and obj is not None and obj.type == "MESH":
-            layout.label(text=f"{len(landmark_empties.landmark_empties(obj))} landmark empties on the mesh")
+            layout.label(text=f"{len(landmark_empties.landmark_empties(obj))} landmark empties")
         if s.method == "TRANSFER":
             row = layout.row()
-            row.prop(s, "arkit")
-            row.prop(s, "expressions")
-        layout.prop(s, "output_dir")
+            row.prop(s, "arkit", text="ARKit")
+            row.prop(s, "expressions", text="AUs")
+        _labelled(layout, "Keep files", s, "output_dir")
         layout.operator("autobones.rig", icon="ARMATURE_DATA")
+
+
+def _labelled(layout, label, data, prop):
+    """A label and a field on one row, the label given room (the sidebar is narrow)."""
+    split = layout.split(factor=0.38)
+    split.label(text=label)
+    split.prop(data, prop, text="")
 
 
 class AUTOBONES_PT_landmarks(_Sidebar, bpy.types.Panel):
@@ -82,10 +89,13 @@ class AUTOBONES_PT_pose(_Sidebar, bpy.types.Panel):
         mesh = result.rig_mesh(context.active_object)
         arm = result.rig_armature(mesh)
         col = layout.column(align=True)
+        col.label(text="Bones (X nods), degrees")
         for name in POSE_BONES:
             pb = arm.pose.bones.get(name)
             if pb is not None:
-                col.prop(pb, "rotation_euler", text=name)
+                split = col.split(factor=0.2, align=True)
+                split.label(text=name)
+                split.row(align=True).prop(pb, "rotation_euler", text="")
         keys = result.rig_shape_keys(mesh)
         if keys:
             layout.prop(s, "shape_key_filter", icon="VIEWZOOM")

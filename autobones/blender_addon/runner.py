@@ -147,7 +147,8 @@ class Job:
 
     def status(self):
         """The latest progress line (``-v`` stages), one line."""
-        return one_line(self.lines[-1]) if self.lines else "starting"
+        line = self.lines[-1] if self.lines else "starting"
+        return one_line(line[len("autobones: "):] if line.startswith("autobones: ") else line)
 
     def poll(self):
         """None while running; else the exit code (after the pipes are drained)."""
