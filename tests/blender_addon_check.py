@@ -12,7 +12,8 @@ PYTHON is the interpreter with autobones installed (the add-on's preference). Wr
   what the add-on made (parenting, modifier, text block);
 - ``<run>.npz`` per run (``a_place``, ``a_transfer``: the head as given, metres, +Y up;
   ``b_place``, ``b_transfer``: the same head in millimetres, +Z up, moved and scaled in the scene,
-  landmarks placed as empties with the add-on's operator): the armature's bones (names, parents,
+  landmarks placed as empties with the add-on's operator; ``c_auto``: transfer with the landmarks found
+  automatically): the armature's bones (names, parents,
   heads, tails, X and Y axes in the mesh's own frame), every vertex group's weights, the shape keys'
   offsets, the landmark empties, the mesh moved by turning ``head`` 20 degrees about its X axis, and
   the rest pose before and after ``autobones.reset_pose``. Each run keeps its autobones files in
@@ -190,6 +191,12 @@ def main(zip_path, python, head_obj, landmarks_json, out):
         os.makedirs(os.path.join(out, run))
         rig(report, run, output_dir=os.path.join(out, run), **opts)
         record(b, out, report, run)
+    # a human face and no landmarks: transfer finds them (autobones[landmarks]) and they come back as empties
+    c = make_mesh("head_auto", V, F, Matrix.Translation((-0.4, 0.0, 0.0)))
+    activate(c)
+    os.makedirs(os.path.join(out, "c_auto"))
+    rig(report, "c_auto", method="TRANSFER", landmarks="AUTO", arkit=False, output_dir=os.path.join(out, "c_auto"))
+    record(c, out, report, "c_auto")
     with open(os.path.join(out, "report.json"), "w") as fh:
         json.dump(report, fh, indent=1)
 

@@ -20,7 +20,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 HEAD = ROOT / "generic_rig" / "default_head.obj"
 LANDMARKS = ROOT / "generic_rig" / "default_head.landmarks.json"
-RUNS = {"a_place": "head", "a_transfer": "head", "b_place": "head_mm", "b_transfer": "head_mm"}
+RUNS = {"a_place": "head", "a_transfer": "head", "b_place": "head_mm", "b_transfer": "head_mm", "c_auto": "head_auto"}
+MORPH_TARGETS = {"a_transfer": 52, "b_transfer": 52}  # --arkit; none for place or a transfer without options
 TO_B = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]]) * 1000.0  # the head as given -> millimetres, +Z up
 pytestmark = pytest.mark.slow
 
@@ -85,18 +86,18 @@ def test_the_rig_in_blender_is_the_rig_autobones_wrote(scene, run):
     # every weight of the sidecar (not the glb's four), one vertex group per bone
     assert got["weights"].shape == rig.weights.shape
     assert np.abs(got["weights"] - rig.weights).max() <= 1e-6
-    assert (rig.weights > 0).sum(axis=1).max() > 4 or run.endswith("transfer")
+    assert (rig.weights > 0).sum(axis=1).max() > 4 or not run.endswith("place")
     assert set(names) <= {str(g) for g in got["group_names"]}
     # a shape key per morph target, under its name, with the glb's offsets
     assert [str(s) for s in got["shape_key_names"]] == [n for n, _ in src.morph_targets]
-    assert len(src.morph_targets) == (52 if run.endswith("transfer") else 0)
+    assert len(src.morph_targets) == MORPH_TARGETS.get(run, 0)
     for delta, (name, want) in zip(got["shape_key_deltas"], src.morph_targets):
         assert np.linalg.norm(delta - want, axis=1).max() <= 1e-6 * size, name
     # on the same object, at rest, and the sidecar kept
     made = report["made"][run]
     assert made["armature_parent"] == made["mesh"] == RUNS[run] and made["armature_parent_type"] == "OBJECT"
     assert made["modifier_object"] == f"{RUNS[run]}_rig" and made["modifier_index"] == 0
-    assert made["armatures_in_scene"] == (1 if run.startswith("a") else 2)  # rigging again replaced the rig
+    assert made["armatures_in_scene"] == " abc".index(run[0])  # rigging again replaced the rig
     assert made["sidecar_text"] == (out / run / f"{RUNS[run]}.rig.json").read_text()
     assert np.abs(got["rest"] - got["mesh"]).max() <= 1e-6 * size
     assert np.abs(got["mesh"] - rig.vertices).max() <= 1e-6 * size  # vertex order and values kept
@@ -160,6 +161,17 @@ def test_landmark_empties_are_snapped_named_and_written_for_autobones(scene):
         assert np.linalg.norm(placed[name] - TO_B @ np.asarray(p)) <= 0.005 * size, name
     # the transfer used exactly those, and its landmarks came back as the same empties
     assert sorted(src.rig.landmarks) == sorted(placed)
+    for name, p in src.rig.landmarks.items():
+        assert np.linalg.norm(np.asarray(p) - placed[name]) <= 1e-6 * size
+
+
+def test_automatic_landmarks_come_back_as_empties(scene):
+    out, _, _ = scene
+    got, src = _rig(out, "c_auto")
+    assert src.rig.options["landmarks_source"] == "detected" and len(src.rig.landmarks) >= 20  # MediaPipe: 27
+    placed = dict(zip((str(s) for s in got["landmark_names"]), got["landmarks"]))
+    assert sorted(placed) == sorted(src.rig.landmarks)
+    size = float(src.rig.frame.size)
     for name, p in src.rig.landmarks.items():
         assert np.linalg.norm(np.asarray(p) - placed[name]) <= 1e-6 * size
 

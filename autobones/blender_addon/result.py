@@ -92,7 +92,14 @@ def build_armature(context, obj, rig, sidecar):
     view_layer = context.view_layer
     previous = view_layer.objects.active
     view_layer.objects.active = arm
-    bpy.ops.object.mode_set(mode="EDIT")
+    try:  # edit bones exist only in edit mode, which needs the armature visible in the view layer
+        bpy.ops.object.mode_set(mode="EDIT")
+    except RuntimeError as exc:
+        view_layer.objects.active = previous
+        bpy.data.objects.remove(arm)
+        bpy.data.armatures.remove(data)
+        raise AddonError(f"autobones: cannot make the armature beside {obj.name} (is its collection hidden?): "
+                         f"{' '.join(str(exc).split())}") from None
     try:
         bones = []
         for name, frame in zip(rig["joint_names"], rig["world"]):
