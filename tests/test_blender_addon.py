@@ -26,12 +26,6 @@ TO_B = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]]) * 1000.0  # the head a
 pytestmark = pytest.mark.slow
 
 
-def _cli(args, cwd):
-    """``autobones ARGS`` run in a subprocess from ``cwd``: CompletedProcess (text)."""
-    return subprocess.run([sys.executable, "-m", "autobones", *map(str, args)], cwd=cwd, capture_output=True,
-                          text=True, timeout=120)
-
-
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     """(out folder, report dict, Blender's log) of one Blender run of tests/blender_addon_check.py."""
@@ -39,9 +33,10 @@ def scene(tmp_path_factory):
     if blender is None:
         pytest.fail("blender is not on PATH; install it with: apt-get install blender python3-numpy "
                     "(or bash tools/test-setup.sh)")
+    from autobones.blender_zip import write_addon_zip
+
     work = tmp_path_factory.mktemp("blender_addon")
-    made = _cli(["blender-addon", "-o", "autobones_blender.zip"], work)
-    assert made.returncode == 0, made.stderr
+    write_addon_zip(work / "autobones_blender.zip")  # what `autobones blender-addon` writes (tested below)
     out, scripts = work / "out", work / "user_scripts"
     out.mkdir()
     # Debian's Blender finds its Python's standard library through the first python3.X on PATH (see
@@ -195,8 +190,13 @@ def test_bad_input_is_one_line_in_blenders_report_never_a_traceback(scene):
 
 @pytest.fixture
 def cli(capsys, monkeypatch):
-    """Run ``autobones ARGS`` in this process from folder ``cwd``: (exit code, stdout, stderr)."""
-    from autobones.cli.main import main
+    """Run ``autobones ARGS`` in this process from folder ``cwd``: (exit code, stdout, stderr). The command
+    line is this checkout's ``cli/`` (as tests/test_cli.py runs ``python -m cli.main``), whichever
+    autobones is installed."""
+    import importlib
+
+    monkeypatch.syspath_prepend(str(ROOT))
+    main = importlib.import_module("cli.main").main
 
     def run(args, cwd):
         monkeypatch.chdir(cwd)
