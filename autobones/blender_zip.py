@@ -11,6 +11,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import zipfile
 
 from .errors import AutobonesError
@@ -20,6 +21,14 @@ from .io.landmark_names import NAMES
 MODULE = "autobones_blender"  # the add-on's module name in Blender (its folder in the zip)
 SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "blender_addon")
 NAMES_FILE = "landmark_names.json"
+_BL_VERSION = re.compile(rb'"version": \([0-9, ]*\),')
+
+
+def _version_tuple():
+    """autobones' version as bl_info's tuple of whole numbers (``0.1.0`` -> ``(0, 1, 0)``)."""
+    from .version import __version__
+
+    return tuple(int(p) for p in re.findall(r"\d+", __version__)[:3])
 
 
 def addon_files():
@@ -28,7 +37,10 @@ def addon_files():
     for name in sorted(os.listdir(SOURCE)):
         if name.endswith(".py"):
             with open(os.path.join(SOURCE, name), "rb") as fh:
-                files.append((f"{MODULE}/{name}", fh.read()))
+                data = fh.read()
+            if name == "__init__.py":  # Blender shows bl_info's version: autobones' own
+                data = _BL_VERSION.sub(f'"version": {_version_tuple()},'.encode(), data, count=1)
+            files.append((f"{MODULE}/{name}", data))
     names = json.dumps({"format": "autobones-landmarks/1", "names": list(NAMES)}, indent=1) + "\n"
     files.append((f"{MODULE}/{NAMES_FILE}", names.encode()))
     return sorted(files)

@@ -223,7 +223,14 @@ def test_cli_writes_the_same_zip_every_time_and_refuses_a_bad_output(tmp_path, c
         assert "autobones_blender/__init__.py" in files and "autobones_blender/operators.py" in files
         assert all(f.startswith("autobones_blender/") and "__pycache__" not in f for f in files)
         assert json.loads(zf.read("autobones_blender/landmark_names.json"))["names"] == list(NAMES)
-        assert b'"blender": (3, 4, 0)' in zf.read("autobones_blender/__init__.py")
+        import ast
+
+        from autobones import __version__
+
+        init = zf.read("autobones_blender/__init__.py").decode()
+        bl_info = ast.literal_eval(init[init.index("bl_info = ") + 10:init.index("}", init.index("bl_info")) + 1])
+        assert bl_info["blender"] == (3, 4, 0) and bl_info["category"] == "Rigging"
+        assert ".".join(map(str, bl_info["version"])) == __version__
     (tmp_path / "notes.zip").write_text("my notes")
     for target, words in (("notes.zip", "is not a zip file"), ("missing/a.zip", "does not exist"),
                           ("addon.txt", "written as a .zip"), ("b", "written as a .zip")):
@@ -234,3 +241,52 @@ def test_cli_writes_the_same_zip_every_time_and_refuses_a_bad_output(tmp_path, c
         assert words in err, err
         assert sorted(p.name for p in tmp_path.rglob("*")) == before  # nothing written
     assert (tmp_path / "notes.zip").read_text() == "my notes"
+
+
+# --------------------------------------------------------------------------- the add-on's subprocess side
+# autobones/blender_addon/runner.py needs no Blender (standard library and numpy): its background job,
+# which the Rig button's modal run polls for the status bar, is checked here directly.
+
+def _finish(job, seconds=120):
+    import time
+
+    t = time.monotonic()
+    while job.poll() is None:
+        assert time.monotonic() - t < seconds
+        time.sleep(0.05)
+
+
+def test_the_background_job_reports_stages_and_autobones_one_line_error(tmp_path):
+    from autobones.blender_addon import runner
+
+    cmd = runner.autobones_command(sys.executable)
+    assert cmd == [sys.executable, "-m", "autobones"]
+    job = runner.Job(cmd + ["place", str(HEAD), "--density", "sparse", "-o", str(tmp_path / "h.glb"), "-v"])
+    _finish(job)
+    assert job.result().startswith(str(tmp_path / "h.glb")) and (tmp_path / "h.weights.npz").is_file()
+    assert len(job.lines) >= 3 and not job.status().startswith("autobones: ")  # -v stages, shown bare
+    bad = tmp_path / "few.json"
+    bad.write_text(json.dumps({"format": "autobones-landmarks/1", "landmarks": {"pronasale": [0, 0.08, 0.1]}}))
+    job = runner.Job(cmd + ["transfer", str(HEAD), "--landmarks", str(bad), "-o", str(tmp_path / "t.glb"), "-v"])
+    _finish(job)
+    with pytest.raises(runner.AddonError) as err:
+        job.result()
+    assert str(err.value).startswith("autobones transfer: error: ") and "\n" not in str(err.value)
+    assert not (tmp_path / "t.glb").exists()
+
+
+def test_the_background_job_stops_and_other_failures_are_one_line(tmp_path):
+    from autobones.blender_addon import runner
+
+    job = runner.Job([sys.executable, "-c", "import time; time.sleep(60)"])
+    job.cancel()  # Esc
+    _finish(job, seconds=10)
+    crash = runner.Job([sys.executable, "-c", "import sys; sys.stderr.write('Traceback\\n  boom\\nValueError: x\\n'); "
+                                              "sys.exit(1)"])
+    _finish(crash)
+    with pytest.raises(runner.AddonError, match=r"^autobones failed \(exit 1\): ValueError: x$"):
+        crash.result()
+    with pytest.raises(runner.AddonError, match="not an executable file"):
+        runner.autobones_command(str(tmp_path / "python3"))
+    with pytest.raises(runner.AddonError, match="did not run"):
+        runner.Job([str(tmp_path)])  # a folder: the OS refuses to start it

@@ -135,7 +135,13 @@ class AUTOBONES_OT_rig(bpy.types.Operator):
         try:
             self._job.result()
             obj, out = self._run[0], self._run[2]
+            if obj.name not in context.scene.objects:  # deleted (ReferenceError) or moved away meanwhile
+                raise AddonError("autobones: the mesh left the scene while autobones ran; nothing imported")
             made = result.import_result(context, obj, out)
+        except ReferenceError:
+            self._cleanup(context)
+            self.report({"ERROR"}, "autobones: the mesh was deleted while autobones ran; nothing imported")
+            return {"CANCELLED"}
         except AddonError as exc:
             self._cleanup(context)
             self.report({"ERROR"}, runner.one_line(exc))

@@ -42,7 +42,7 @@ def read_result(glb_path):
         with np.load(npz_path) as z:
             W, names = z["weights"], [str(s) for s in z["bone_names"]]
         rig = glb.read_rig_glb(glb_path)
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError, KeyError, IndexError, TypeError) as exc:  # a truncated or foreign file
         raise AddonError(f"cannot read autobones' result {os.path.basename(glb_path)}: {exc}") from None
     return sidecar, W, names, rig
 
