@@ -23,7 +23,6 @@ LANDMARKS = ROOT / "generic_rig" / "default_head.landmarks.json"
 RUNS = {"a_place": "head", "a_transfer": "head", "b_place": "head_mm", "b_transfer": "head_mm", "c_auto": "head_auto"}
 MORPH_TARGETS = {"a_transfer": 52, "b_transfer": 52}  # --arkit; none for place or a transfer without options
 TO_B = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]]) * 1000.0  # the head as given -> millimetres, +Z up
-pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
@@ -63,6 +62,7 @@ def _rig(out, run):
     return got, read_rig_source(out / run / f"{RUNS[run]}.glb")
 
 
+@pytest.mark.slow  # Blender
 @pytest.mark.parametrize("run", list(RUNS))
 def test_the_rig_in_blender_is_the_rig_autobones_wrote(scene, run):
     out, report, log = scene
@@ -98,6 +98,7 @@ def test_the_rig_in_blender_is_the_rig_autobones_wrote(scene, run):
     assert np.abs(got["mesh"] - rig.vertices).max() <= 1e-6 * size  # vertex order and values kept
 
 
+@pytest.mark.slow  # Blender
 @pytest.mark.parametrize("run", list(RUNS))
 def test_turning_head_20_degrees_moves_the_head_and_not_the_neck_base(scene, run):
     out, report, _ = scene
@@ -118,6 +119,7 @@ def test_turning_head_20_degrees_moves_the_head_and_not_the_neck_base(scene, run
     assert np.abs(got["after_reset"] - got["mesh"]).max() <= 1e-6 * size  # autobones.reset_pose
 
 
+@pytest.mark.slow  # Blender
 def test_the_millimetre_z_up_head_gets_the_same_rig_sitting_on_it(scene):
     out, _, _ = scene
     for kind in ("place", "transfer"):
@@ -127,7 +129,7 @@ def test_the_millimetre_z_up_head_gets_the_same_rig_sitting_on_it(scene):
         size_a = float(src_a.rig.frame.size)
         # the same bones on the same head: b's mapped back to a's frame and unit
         back = got_b["heads"] @ np.linalg.inv(TO_B).T
-        assert np.linalg.norm(back - got_a["heads"], axis=1).max() <= 0.01 * size_a, kind
+        assert np.linalg.norm(back - got_a["heads"], axis=1).max() <= 1e-3 * size_a, kind  # measured 1e-7
         # and on the mesh in the scene: every joint inside the moved, scaled head's world bounding box
         M = got_b["matrix_world"]
         world = got_b["heads"] @ M[:3, :3].T + M[:3, 3]
@@ -137,6 +139,7 @@ def test_the_millimetre_z_up_head_gets_the_same_rig_sitting_on_it(scene):
         assert np.abs(M[:3, 3] - [0.4, 0.1, 0.0]).max() < 1e-6  # the object itself did not move
 
 
+@pytest.mark.slow  # Blender
 def test_landmark_empties_are_snapped_named_and_written_for_autobones(scene):
     from autobones.io.landmarks import NAMES, read_landmarks
 
@@ -160,6 +163,7 @@ def test_landmark_empties_are_snapped_named_and_written_for_autobones(scene):
         assert np.linalg.norm(np.asarray(p) - placed[name]) <= 1e-6 * size
 
 
+@pytest.mark.slow  # Blender
 def test_automatic_landmarks_come_back_as_empties(scene):
     out, _, _ = scene
     got, src = _rig(out, "c_auto")
@@ -171,6 +175,7 @@ def test_automatic_landmarks_come_back_as_empties(scene):
         assert np.linalg.norm(np.asarray(p) - placed[name]) <= 1e-6 * size
 
 
+@pytest.mark.slow  # Blender
 def test_bad_input_is_one_line_in_blenders_report_never_a_traceback(scene):
     _, report, log = scene
     errors = report["errors"]
