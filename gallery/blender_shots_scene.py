@@ -1,12 +1,14 @@
 """Blender side of gallery/make_blender_shots.py: the add-on in a real Blender, pictured.
 
-    blender --factory-startup --enable-event-simulate EMPTY.blend -P blender_shots_scene.py -- ui ZIP PYTHON HEAD LANDMARKS OUT
+    blender --factory-startup --enable-event-simulate EMPTY.blend -P blender_shots_scene.py -- \
+        ui ZIP PYTHON HEAD LANDMARKS OUT
     blender -b --factory-startup -P blender_shots_scene.py -- render ZIP PYTHON HEAD LANDMARKS OUT
 
 ``ui`` (a window, under Xvfb): installs the zip, opens the sidebar's autobones tab (Ctrl+wheel over it,
 simulated), presses Rig (``INVOKE_DEFAULT``: the modal run with progress in the status bar), poses
-the result and saves whole-window screenshots (``progress.png``, ``pose.png``, ``landmarks.png``) and
-``areas.json`` (where the 3D view and the status bar are, to crop them).
+the result and saves whole-window screenshots (``progress.png``, ``pose.png``, ``landmarks.png``),
+``areas.json`` (where the 3D view and the status bar are, to crop them) and ``ui.json`` (how often each
+panel drew, the status lines shown; tests/test_blender_addon.py checks them).
 ``render`` (``-b``): rigs through the operator's script path and renders the head with Blender's
 workbench engine at rest and in three ARKit poses (``render_<pose>.png``).
 The head is the OBJ as given (+Y up), turned upright by its object transform: the add-on rigs the
@@ -16,6 +18,7 @@ import json
 import math
 import os
 import sys
+import traceback
 
 import bpy
 from mathutils import Euler
@@ -26,9 +29,40 @@ POSES = {"rest": {}, "jawOpen": {"jawOpen": 0.8}, "smile": {"mouthSmileLeft": 1.
          "blink_brows": {"eyeBlinkLeft": 1.0, "eyeBlinkRight": 1.0, "browInnerUp": 1.0}}
 
 
+SEEN = {"draws": {}, "status": []}  # what the window showed: panel draws, status-bar lines (ui.json)
+
+
+def _watch():
+    """Count each panel's draws and keep each status line the modal run shows (tests/test_blender_addon.py)."""
+    from autobones_blender import panel, runner
+
+    for cls in reversed(panel.CLASSES):  # a registered panel's methods are fixed: re-register it wrapped
+        bpy.utils.unregister_class(cls)
+    for cls in panel.CLASSES:
+        cls.draw = _counted(cls.draw, cls.__name__)
+        bpy.utils.register_class(cls)
+    status = runner.Job.status
+
+    def shown(job):
+        line = status(job)
+        if not SEEN["status"] or SEEN["status"][-1] != line:
+            SEEN["status"].append(line)
+        return line
+    runner.Job.status = shown
+
+
+def _counted(draw, name):
+    """``draw`` counting its calls in SEEN (Blender wants exactly (self, context))."""
+    def counted(self, context):
+        SEEN["draws"][name] = SEEN["draws"].get(name, 0) + 1
+        draw(self, context)
+    return counted
+
+
 def setup():
     bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
     bpy.ops.preferences.addon_enable(module="autobones_blender")
+    _watch()
     bpy.context.preferences.addons["autobones_blender"].preferences.autobones_path = PYTHON
     V, F = [], []
     with open(HEAD) as fh:
@@ -104,8 +138,13 @@ class UI:
     def __call__(self):
         if not self.steps:
             return None
-        step = self.steps[0]
-        again = step()
+        try:
+            again = self.steps[0]()
+        except Exception:  # noqa: BLE001 -- say what broke and leave: a window left open waits forever
+            traceback.print_exc()
+            SEEN["failed"] = self.steps[0].__name__
+            self.steps = [self.quit]
+            return 0.1
         if not again:
             self.steps.pop(0)
         return 0.4
@@ -187,6 +226,8 @@ class UI:
         _shot("landmarks.png")
 
     def quit(self):
+        with open(os.path.join(OUT, "ui.json"), "w") as fh:
+            json.dump(SEEN, fh, indent=1)
         bpy.ops.wm.quit_blender()
 
 

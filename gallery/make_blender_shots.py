@@ -4,7 +4,7 @@
 
 - ``gallery/blender_addon.png``: a screenshot of Blender 3.4's own window (under Xvfb): the built-in
   default head rigged by the add-on's Rig button (transfer, landmark file, ARKit), the sidebar's
-  autobones tab with its Rig and Pose panels, the jaw bone turned 8 degrees and the mouthSmile shape
+  autobones tab with its Rig, Landmarks and Pose panels, the jaw bone turned 8 degrees and the mouthSmile shape
   keys at 1; the armature drawn in front.
 - ``docs/images/blender_landmarks.png``: the same window with the 44 landmark empties on the skin.
 - ``docs/images/blender_progress.png``: the status bar while autobones runs (the modal Rig).

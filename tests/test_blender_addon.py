@@ -8,6 +8,7 @@ compared here with the files autobones wrote (read by autobones' own readers, no
 """
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -191,6 +192,40 @@ def test_bad_input_is_one_line_in_blenders_report_never_a_traceback(scene):
         assert message.startswith("Error: ") and words in message, message
     assert "at least 10" in errors["autobones_exit_2"]  # autobones' own one-line message
     assert "Traceback" not in log and "Dependency cycle" not in log
+
+
+@pytest.mark.slow  # Blender
+def test_the_rig_button_runs_in_the_background_with_progress_in_blenders_window(tmp_path):
+    """Blender's own window (under Xvfb): the panels draw, Rig runs modal with its stages in the status bar."""
+    from autobones.blender_zip import write_addon_zip
+
+    blender, xvfb = shutil.which("blender"), shutil.which("xvfb-run")
+    if blender is None or xvfb is None:
+        pytest.fail("blender or xvfb-run is not on PATH; install them with: apt-get install blender python3-numpy "
+                    "xvfb xauth (or bash tools/test-setup.sh)")
+    write_addon_zip(tmp_path / "autobones_blender.zip")
+    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(tmp_path / "user_scripts"),
+               PATH=os.path.dirname(os.path.realpath(blender)) + os.pathsep + os.environ.get("PATH", ""))
+    empty = tmp_path / "empty.blend"  # opening a file skips the splash screen
+    subprocess.run([blender, "-b", "--factory-startup", "--python-expr",
+                    "import bpy; bpy.ops.wm.read_factory_settings(use_empty=True); "
+                    f"bpy.ops.wm.save_as_mainfile(filepath={str(empty)!r})"], env=env, capture_output=True, timeout=120)
+    script = ROOT / "gallery" / "blender_shots_scene.py"  # the gallery's window run, also a test of it
+    run = subprocess.run([xvfb, "-a", "-s", "-screen 0 1600x1000x24", blender, "--factory-startup",
+                          "--enable-event-simulate", str(empty), "--python", str(script), "--", "ui",
+                          str(tmp_path / "autobones_blender.zip"), sys.executable, str(HEAD), str(LANDMARKS),
+                          str(tmp_path)], capture_output=True, text=True, timeout=300, env=env)
+    log = run.stdout + run.stderr
+    assert run.returncode == 0 and "Traceback" not in log, log[-3000:]
+    seen = json.loads((tmp_path / "ui.json").read_text())
+    assert "failed" not in seen, seen
+    assert all(seen["draws"].get(p, 0) >= 1 for p in ("AUTOBONES_PT_rig", "AUTOBONES_PT_landmarks",
+                                                       "AUTOBONES_PT_pose")), seen  # drawn without an error
+    # the status bar followed autobones' stages (-v), then the report said what was made and how long it took
+    assert len(seen["status"]) >= 3 and any(s.startswith("arkit ") for s in seen["status"]), seen
+    assert re.search(r"Info: autobones: rigged head: 5 bones, 5 vertex groups \(up to \d+ weights a vertex\), "
+                     r"52 shape keys, 44 landmarks, \d+\.\d s", log), log[-3000:]
+    assert (tmp_path / "pose.png").stat().st_size > 10000
 
 
 @pytest.fixture

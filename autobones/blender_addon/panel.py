@@ -55,7 +55,6 @@ class AUTOBONES_PT_landmarks(_Sidebar, bpy.types.Panel):
 
     bl_label = "Landmarks"
     bl_parent_id = "AUTOBONES_PT_rig"
-    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         s, layout = context.scene.autobones, self.layout
@@ -63,15 +62,14 @@ class AUTOBONES_PT_landmarks(_Sidebar, bpy.types.Panel):
         if not landmark_names():
             layout.label(text="Reinstall the zip from autobones blender-addon", icon="ERROR")
             return
-        layout.prop(s, "landmark_name")
+        _labelled(layout, "Name", s, "landmark_name")
         layout.operator("autobones.add_landmark", icon="EMPTY_SINGLE_ARROW")
-        layout.label(text="Shift+right-click on the skin puts the cursor there")
-        row = layout.row()
-        row.operator("autobones.snap_landmarks", icon="SNAP_FACE")
-        row.operator("autobones.write_landmarks", icon="EXPORT")
+        layout.label(text="Shift+right-click: cursor on skin")
+        layout.operator("autobones.snap_landmarks", text="Snap to surface", icon="SNAP_FACE")
+        layout.operator("autobones.write_landmarks", text="Write landmark file", icon="EXPORT")
         if obj is not None and obj.type == "MESH":
             placed = len(landmark_empties.landmark_empties(obj))
-            layout.label(text=f"{placed} of {len(landmark_names())} placed (10 well spread are enough)")
+            layout.label(text=f"{placed} of {len(landmark_names())} placed (10+)")
 
 
 class AUTOBONES_PT_pose(_Sidebar, bpy.types.Panel):
