@@ -57,7 +57,10 @@ def prepare(context):
     """Everything a run needs: (mesh object, command, output glb, folder, remove folder afterwards)."""
     obj = _mesh(context)
     if obj.mode != "OBJECT":  # edit-mode changes reach the mesh data only in object mode
-        bpy.ops.object.mode_set(mode="OBJECT")
+        try:
+            bpy.ops.object.mode_set(mode="OBJECT")
+        except RuntimeError as exc:
+            raise AddonError(runner.one_line(f"autobones: cannot leave {obj.mode.lower()} mode: {exc}")) from None
     settings = context.scene.autobones
     cmd = runner.autobones_command(preferences(context).autobones_path)
     folder, temporary = _work_folder(settings)
@@ -68,6 +71,10 @@ def prepare(context):
         landmarks = _landmark_file(settings, obj, folder, stem)
         out = os.path.join(folder, stem + ".glb")
         return obj, cmd + runner.rig_arguments(settings, mesh_path, out, landmarks), out, folder, temporary
+    except OSError as exc:  # a full disk, a folder that takes no files
+        if temporary:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise AddonError(runner.one_line(f"autobones: cannot write the mesh in {folder}: {exc}")) from None
     except BaseException:
         if temporary:
             shutil.rmtree(folder, ignore_errors=True)
