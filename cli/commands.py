@@ -311,6 +311,15 @@ def cmd_animate(args):
     return 0
 
 
+def cmd_blender_addon(args):
+    from autobones.blender_zip import write_addon_zip
+
+    r = write_addon_zip(args.output)
+    print(f"{r['path']}: Blender add-on {r['module']} ({r['files']} files, {r['bytes']} bytes); install it in "
+          f"Blender with Edit > Preferences > Add-ons > Install..., then see the sidebar's autobones tab")
+    return 0
+
+
 COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
             "build-rig": cmd_build_rig, "batch": cmd_batch, "view": cmd_view,
-            "export": cmd_export, "animate": cmd_animate}
+            "export": cmd_export, "animate": cmd_animate, "blender-addon": cmd_blender_addon}

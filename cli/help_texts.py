@@ -126,6 +126,24 @@ bad input (not an autobones glb, sidecars missing, unknown suffix, -o = the inpu
 exit code 2, nothing written.
 """
 
+BLENDER_ADDON_EPILOG = """\
+examples:
+  autobones blender-addon                          -> autobones_blender.zip
+  autobones blender-addon -o ~/addons/autobones_blender.zip
+
+In Blender (3.4 or newer): Edit > Preferences > Add-ons > Install... > the zip, tick
+"Rigging: autobones". Its preference names the Python that has autobones installed (or the
+autobones executable); empty: autobones on PATH. Blender's own Python needs nothing.
+
+The sidebar (N) of the 3D view gets an autobones tab: Rig the active mesh with place or
+transfer (landmarks from a file, from empties, or automatic; --arkit, --expressions), place
+landmarks as empties on the skin and write them out, pose the jaw, head, neck and eyes and the
+shape keys. See docs/blender.md.
+
+bad output (not .zip, an existing file that is not a zip, a missing folder): one line, exit
+code 2, nothing written.
+"""
+
 
 def pose_epilog():
     """The pose command's help: examples, then the AUs and emotions of the data file."""

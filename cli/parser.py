@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BUILD_EPILOG, EXPORT_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG,
-                         TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
+from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BLENDER_ADDON_EPILOG, BUILD_EPILOG, EXPORT_EPILOG,
+                         LANDMARKS_EPILOG, PLACE_EPILOG, TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -33,6 +33,7 @@ def build_parser():
     add_view(sub)
     add_export(sub)
     add_animate(sub)
+    add_blender_addon(sub)
     parser.command_parsers = sub.choices  # name -> its parser: an unknown option is that command's error
     return parser
 
@@ -261,6 +262,18 @@ def add_animate(sub):
                    help="frame rate of the timecode's frame field (default 60, Live Link Face's)")
     n.add_argument("--no-bones", action="store_true", help="morph-target weights only, no head and eye turns")
     _common(n)
+
+
+def add_blender_addon(sub):
+    """The ``blender-addon`` command's arguments."""
+    z = sub.add_parser(
+        "blender-addon", help="write the Blender add-on (a zip to install in Blender 3.4+)",
+        description="Write autobones' Blender add-on as a zip: install it in Blender (Edit > Preferences > "
+                    "Add-ons > Install...) to rig the active mesh from the 3D view's sidebar.",
+        epilog=BLENDER_ADDON_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    z.add_argument("-o", "--output", default="autobones_blender.zip", metavar="OUT.zip",
+                   help="the zip to write (default: autobones_blender.zip in the current folder)")
+    _common(z)
 
 
 def _axes(p, note=""):

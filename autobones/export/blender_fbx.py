@@ -23,11 +23,21 @@ the axis in the bone's own rest frame, Blender's pose-bone space, whose +Y runs 
 turns that one bone, evaluates the armature-deformed mesh and saves its vertices (k, n, 3) in
 the glTF file frame and units (``positions``), every other bone at rest.
 """
+import importlib.util
 import json
+import os
 import sys
 
 import bpy
 import numpy as np
+
+# every weight as vertex groups: the code the Blender add-on uses too (autobones/blender_addon/vertex_groups.py),
+# loaded by path because Blender runs this file as a script, outside the package
+_spec = importlib.util.spec_from_file_location(
+    "autobones_vertex_groups", os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "blender_addon",
+                                            "vertex_groups.py"))
+vertex_groups = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(vertex_groups)
 
 # Blender 3.4's glTF importer still uses ``np.bool`` (removed in numpy 1.24, which Debian 12 ships
 # with Blender 3.4): restore the alias so the importer runs with its default options.
@@ -62,13 +72,7 @@ def rest_positions(obj):
 
 def full_weights(obj, names):
     """(n, len(names)) vertex-group weights, 0 where a vertex is not in a group."""
-    col = {obj.vertex_groups[n].index: j for j, n in enumerate(names) if n in obj.vertex_groups}
-    W = np.zeros((len(obj.data.vertices), len(names)))
-    for v in obj.data.vertices:
-        for g in v.groups:
-            if g.group in col:
-                W[v.index, col[g.group]] = g.weight
-    return W
+    return vertex_groups.read_full_weights(obj, names)
 
 
 def export(glb, npz, out, report_path):
@@ -93,13 +97,7 @@ def export(glb, npz, out, report_path):
         tree.balance()
         rows, how = np.array([tree.find(p.tolist())[1] for p in P]), "nearest position"
     report["weights_matched_by"] = how
-    for name in names:
-        vg = obj.vertex_groups.get(name) or obj.vertex_groups.new(name=name)
-        vg.remove(list(range(len(P))))
-    groups = [obj.vertex_groups[n] for n in names]
-    for i, r in enumerate(rows):
-        for j in np.flatnonzero(W[r] > 0):
-            groups[j].add([i], float(W[r, j]), "REPLACE")
+    vertex_groups.write_full_weights(obj, names, W, rows)
     report["influences_max"] = int((W[rows] > 0).sum(axis=1).max(initial=0))
     keys = obj.data.shape_keys
     report["shape_keys"] = [k.name for k in keys.key_blocks if k != keys.reference_key] if keys else []
