@@ -183,3 +183,14 @@ HeadYaw, HeadPitch, HeadRoll, LeftEyeYaw ... RightEyeRoll in radians (optional);
 frame, Timecode HH:MM:SS:FF.fff increasing. An unknown column, a bad row or a time that does not
 increase is refused (exit 2) and nothing is written.
 """
+
+SAMPLES_EPILOG = """\
+examples:
+  autobones samples s/                      then, for instance:
+  autobones place s/scan.obj -o scan.glb
+  autobones transfer s/robot.obj --landmarks s/robot.landmarks.json --arkit -o robot.glb
+  autobones animate robot.glb --capture s/take.csv -o robot.anim.glb
+
+written: default_head, scan, bust, robot, goat (.obj and .landmarks.json each), goat.pp,
+take.csv, README.md (what to try on each) and LICENSES.md (sources, licences, attribution).
+"""

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BUILD_EPILOG, EXPORT_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG,
+                         SAMPLES_EPILOG,
                          TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
 
 
@@ -33,6 +34,7 @@ def build_parser():
     add_view(sub)
     add_export(sub)
     add_animate(sub)
+    add_samples(sub)
     parser.command_parsers = sub.choices  # name -> its parser: an unknown option is that command's error
     return parser
 
@@ -261,6 +263,21 @@ def add_animate(sub):
                    help="frame rate of the timecode's frame field (default 60, Live Link Face's)")
     n.add_argument("--no-bones", action="store_true", help="morph-target weights only, no head and eye turns")
     _common(n)
+
+
+def add_samples(sub):
+    """The ``samples`` command's arguments."""
+    s = sub.add_parser(
+        "samples", help="write sample heads (scan, bust, cartoon, animal), their landmarks and a capture take",
+        description="Write ready inputs for every command in the documentation into DIR: the default head, a "
+                    "scan, a bust, a cartoon robot and a goat, each with its landmarks, and a short face-capture "
+                    "take (CSV); their licences and attribution in DIR/LICENSES.md.",
+        epilog=SAMPLES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("folder", metavar="DIR", help="folder to write (created; refused when it holds anything, "
+                                                 "unless --force)")
+    s.add_argument("--force", action="store_true", help="write into a folder that is not empty, replacing the "
+                                                        "sample files in it (other files are kept)")
+    _common(s)
 
 
 def _axes(p, note=""):
