@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import clipped_cotangent_laplacian, factor_spd
 from ..geometry.topology import weld
@@ -334,7 +334,7 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     Vt, Ft, _ = resolve_mesh(target_mesh)
     for name, f in fields.items():
         if len(f) != len(Vs):
-            raise AutobonesError(f"field {name!r} has {len(f)} rows; the source mesh has {len(Vs)} vertices")
+            raise AutobonesError(f"field {name!r} has {counted(len(f), 'row')}; the source mesh has {counted(len(Vs), 'vertex', 'vertices')}")
     P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, resolve_landmarks(source_landmarks)[0], resolve_landmarks(target_landmarks)[0], **fit_options)
     out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok, vectors=vectors, directions=directions,
                              V_rest=Vs)
