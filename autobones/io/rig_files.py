@@ -59,10 +59,18 @@ def load_rig(path):
         The glb is missing, unreadable or not written by autobones, a sidecar is missing or
         corrupt, or the three files do not belong together (vertex or bone counts differ).
 
-    Example
-    -------
-    >>> rig = autobones.load_rig("head.glb")
-    >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import autobones
+    >>> from autobones import samples
+    >>> path = os.path.join(tempfile.mkdtemp(), "robot.glb")
+    >>> saved = autobones.transfer(samples.path("robot.obj"), samples.path("robot.landmarks.json")).save(path)
+    >>> rig = autobones.load_rig(path)
+    >>> rig.skeleton.names, len(rig.muscles)
+    (['neck', 'head', 'jaw', 'eye_l', 'eye_r'], 40)
+    >>> rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10).shape == rig.vertices.shape
+    True
     """
     path = path_argument(path, "path")  # load_rig(None): one line naming the argument, not a TypeError
     doc, body = _read_autobones_glb(path)

@@ -325,6 +325,21 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     Returns
     -------
     dict of str -> array, one row per target vertex.
+
+    Examples
+    --------
+    The default head's height and an upper/lower label, carried onto the scan:
+
+    >>> import autobones
+    >>> from autobones import samples
+    >>> V, F = autobones.load_mesh(samples.path("default_head.obj"))
+    >>> fields = {"height": V[:, 1], "upper": (V[:, 1] > 0).astype(int)}
+    >>> out = autobones.transfer_attributes((V, F), samples.path("scan.obj"), fields,
+    ...                                     samples.path("default_head.landmarks.json"),
+    ...                                     samples.path("scan.landmarks.json"))
+    >>> n = len(autobones.load_mesh(samples.path("scan.obj"))[0])
+    >>> out["height"].shape == (n,), out["upper"].dtype.kind, sorted(set(out["upper"].tolist()))
+    (True, 'i', [0, 1])
     """
     from .correspondence import dense_correspondence
     from ..io.landmarks import resolve_landmarks

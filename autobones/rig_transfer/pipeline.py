@@ -174,6 +174,18 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     Rig
         In the head's frame and units: the rig's skeleton, skin weights, labels,
         fields and muscles on the head's own vertices.
+
+    Examples
+    --------
+    >>> import autobones
+    >>> from autobones import samples
+    >>> rig = autobones.transfer(samples.path("goat.obj"), samples.path("goat.pp"))
+    >>> rig.skeleton.names
+    ['neck', 'head', 'jaw', 'eye_l', 'eye_r']
+    >>> len(rig.muscles), len(rig.options["landmarks_used"])
+    (40, 14)
+    >>> rig.fields["jaw_weight"].shape == (len(rig.vertices),)
+    True
     """
     watch = Stopwatch()
     lap, timings = watch.lap, watch.timings
