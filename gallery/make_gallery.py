@@ -1,6 +1,7 @@
 """Regenerate the gallery pictures from real autobones results.
 
-    python gallery/make_gallery.py            # all pictures into gallery/
+    python gallery/make_gallery.py            # all pictures into gallery/ (needs ../shared/data)
+    python gallery/make_gallery.py --out /tmp/pics --only default_head   # any folder; this one needs no shared data
     python gallery/make_gallery.py --only ict_neutral
     python gallery/make_gallery.py --only landmarks     # the four landmark previews below
     python gallery/make_gallery.py --only expressions   # the six emotions on four heads
@@ -59,6 +60,10 @@ from __future__ import annotations
 
 import argparse
 import colorsys
+import os
+import shutil
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -537,7 +542,9 @@ def main(argv=None):
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
-    ap.add_argument("--out", default=str(HERE))
+    ap.add_argument("--out", default=str(HERE), metavar="DIR",
+                    help="folder to write the pictures into (default: gallery/); it must exist. Pictures are made in "
+                         "a temporary folder inside it and moved in only when every one is made")
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
@@ -547,6 +554,31 @@ def main(argv=None):
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
                                          ARKIT_PICTURES if n == "arkit" else [n])]
+    out = Path(args.out)
+    if not out.is_dir():
+        print(f"make_gallery: {out}: no such folder; create it or give another --out", file=sys.stderr)
+        return 2
+    if any(name != "default_head" for name in names) and not (DATA / "misc").is_dir():
+        # the pictures are of the shared data set's heads (only tests/data's subset travels with the clone)
+        print(f"make_gallery: needs the shared data set at {DATA} (ict/, misc/, menpo3d/, zoo/ with their "
+              "landmarks, as ../shared/data beside the repository); not found, nothing written "
+              "(--only default_head needs none)", file=sys.stderr)
+        return 2
+    staging = Path(tempfile.mkdtemp(prefix=".gallery-", dir=out))
+    try:
+        make(names, staging)
+        made = sorted(staging.glob("*.png"))
+        for path in made:  # every picture made: now they replace the old ones, each in one rename
+            os.replace(path, out / path.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    print(f"{out}: {len(made)} pictures")
+    return 0
+
+
+def make(names, out):
+    """Make the pictures ``names`` into the folder ``out``."""
+    args = argparse.Namespace(out=str(out))
     for name in names:
         if name == "arkit_shapes":
             arkit_shapes_picture(args.out)
@@ -593,4 +625,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -37,6 +37,7 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     assert accuracy.count("<table") >= 10  # the benchmark tables came in by include
 
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_the_docstring_examples_pass_as_doctests(tmp_path):
     r = _sphinx("doctest", tmp_path / "doctest")
     report = (tmp_path / "doctest" / "output.txt").read_text()
@@ -76,6 +77,7 @@ def _view(cmd, cwd):
     assert url.startswith("http://127.0.0.1:"), (cmd, url, p.stderr.read())
 
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 @pytest.mark.parametrize("page", [p for p in PAGES if p.name != "index.md"], ids=lambda p: p.stem)
 def test_every_tutorial_command_runs_as_written(tmp_path, monkeypatch, capsys, page):
     """Each page on a fresh folder; ``autobones`` lines run in this process (the same ``main`` the console
@@ -98,3 +100,19 @@ def test_every_tutorial_command_runs_as_written(tmp_path, monkeypatch, capsys, p
             assert r.returncode == 0, f"{page.name}: {cmd}\n{r.stderr}"
         for out in re.findall(r"-o (\S+)", cmd):  # what the page says is written, is
             assert (tmp_path / out).exists(), f"{page.name}: {cmd} did not write {out}"
+
+
+def test_the_gallery_without_the_shared_data_says_so_in_one_line_and_writes_nothing(tmp_path):
+    """A fresh clone has no ../shared/data: one line naming it, exit 2, no picture touched."""
+    import shutil
+
+    repo = tmp_path / "clone"
+    shutil.copytree(ROOT / "gallery", repo / "gallery")
+    before = {p.name: p.read_bytes() for p in (repo / "gallery").glob("*.png")}
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    r = subprocess.run([sys.executable, "gallery/make_gallery.py"], cwd=repo, env=env, capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and r.stdout == "" and r.stderr.count("\n") == 1, r.stderr
+    assert "needs the shared data set" in r.stderr and str(tmp_path / "shared" / "data") in r.stderr
+    assert {p.name: p.read_bytes() for p in (repo / "gallery").glob("*.png")} == before
+    assert not any(n.startswith(".gallery-") for n in os.listdir(repo / "gallery"))  # no staging folder left
