@@ -183,11 +183,17 @@ def _count_then_plural():
                             continue
                         count = isinstance(a.value, ast.Call) and getattr(a.value.func, "id", "") in ("len", "int") \
                             or isinstance(a.value, ast.Name) and len(a.value.id) == 1
-                        noun = re.match(r" (\w+)\b", str(b.value))
+                        # the noun may follow a few qualifiers: "{n} NaN or infinite values"
+                        words = []
+                        for w in re.findall(r"[\w-]+|[^\w\s-]", str(b.value))[:4]:
+                            if not re.fullmatch(r"[\w-]+", w) or w in ("of", "for", "in", "but", "the", "to", "at"):
+                                break
+                            words.append(w)
+                        noun = next((w for w in words if w in NOUNS), None)
                         # "all {k} landmarks", "3 of {n} landmarks": two or more by what comes before
                         plural_by_context = isinstance(prev, ast.Constant) and re.search(r"(all| of) $", prev.value)
-                        if count and noun and noun[1] in NOUNS and not plural_by_context:
-                            bad.append(f"{path.relative_to(ROOT)}:{node.lineno}: {{{ast.unparse(a.value)}}} {noun[1]}")
+                        if count and noun and not plural_by_context:
+                            bad.append(f"{path.relative_to(ROOT)}:{node.lineno}: {{{ast.unparse(a.value)}}} {noun}")
     return bad
 
 

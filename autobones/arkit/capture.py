@@ -106,7 +106,7 @@ def read_capture(path, fps=60.0):
         raise AutobonesError(f"{path}: line 1: column {dup[0]!r} appears twice")
     missing = [capture_column(n) for n in ARKIT_NAMES if capture_column(n) not in cols]
     if missing:
-        raise AutobonesError(f"{path}: line 1: no column {missing[0]!r} ({len(missing)} ARKit shapes missing)")
+        raise AutobonesError(f"{path}: line 1: no column {missing[0]!r} ({counted(len(missing), 'ARKit shape')} missing)")
     if len(rows) < 2:
         raise AutobonesError(f"{path}: no frames after the header")
     width = len(header)

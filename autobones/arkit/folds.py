@@ -268,7 +268,7 @@ def unfold_shapes(V, F, deltas, names, fixed=None, **options):
     D = np.asarray(deltas, dtype=np.float64)
     names = list(names)
     if len(names) != len(D):
-        raise AutobonesError(f"fold repair: {counted(len(names), 'name')} for {len(D)} displacement fields")
+        raise AutobonesError(f"fold repair: {counted(len(names), 'name')} for {counted(len(D), 'displacement field')}")
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     ctx = _Context(V, F)

@@ -326,7 +326,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     else:
         P, shared = np.asarray(correspondence, dtype=np.float64), shared_landmarks(S, lm)
         if P.shape != S.vertices.shape:
-            raise AutobonesError(f"ARKit shapes: {len(P)} corresponding points for the shape set's {counted(len(S.vertices), 'vertex', 'vertices')}")
+            raise AutobonesError(f"ARKit shapes: {counted(len(P), 'corresponding point')} for the shape set's {counted(len(S.vertices), 'vertex', 'vertices')}")
     tim = {"correspond": time.perf_counter() - t}
     names = S.names
     D = np.stack([S.deltas[n] for n in names])

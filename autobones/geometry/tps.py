@@ -66,7 +66,7 @@ def landmark_arrays(src, dst):
     names = sorted(set(src) & set(dst))
     if len(names) < 4:
         raise AutobonesError(
-            f"source and target share only {len(names)} landmark names ({', '.join(names) or 'none'}); "
+            f"source and target share only {counted(len(names), 'landmark name')} ({', '.join(names) or 'none'}); "
             "a 3-D warp needs at least 4 common, well-spread landmarks (10 or more recommended)")
     P = np.array([src[n] for n in names], dtype=np.float64)
     Q = np.array([dst[n] for n in names], dtype=np.float64)

@@ -15,7 +15,7 @@ import zipfile
 import numpy as np
 
 from ..arguments import path_argument
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..expressions.definitions import MODEL_DEFAULTS
 from .files import read_json, shown
 from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
@@ -183,7 +183,7 @@ def _check_together(path, n, P, V, F, W, labels, names, saved_names):
         problems.append("triangle indices out of range")
     for what, a in (("glb positions", P), ("npz vertices", V), ("npz weights", W)):
         if not np.isfinite(a).all():
-            problems.append(f"the {what} hold {int((~np.isfinite(a)).sum())} NaN or infinite values")
+            problems.append(f"the {what} hold {counted(int((~np.isfinite(a)).sum()), 'NaN or infinite value')}")
     if problems:
         raise AutobonesError(f"{path}: the glb and its sidecars do not belong together: {'; '.join(problems)} "
                              "(save the rig again)")
