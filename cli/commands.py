@@ -196,6 +196,17 @@ def cmd_landmarks(args):
     return 0
 
 
+def cmd_samples(args):
+    from autobones.samples import write_samples
+
+    watch = stopwatch()
+    written = write_samples(args.folder, force=args.force)
+    watch.lap("write")
+    print(f"{args.folder}: {len(written)} files ({', '.join(p.name for p in written if p.suffix == '.obj')}, "
+          f"their landmarks, take.csv); licences in {os.path.join(args.folder, 'LICENSES.md')}")
+    return 0
+
+
 def cmd_build_rig(args):
     import autobones
 
@@ -354,17 +365,6 @@ def cmd_animate(args):
     return 0
 
 
-def cmd_samples(args):
-    from autobones.samples import write_samples
-
-    watch = stopwatch()
-    written = write_samples(args.folder, force=args.force)
-    watch.lap("write")
-    print(f"{args.folder}: {len(written)} files ({', '.join(p.name for p in written if p.suffix == '.obj')}, "
-          f"their landmarks, take.csv); licences in {os.path.join(args.folder, 'LICENSES.md')}")
-    return 0
-
-
-COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
+COMMANDS = {"place": cmd_place, "samples": cmd_samples, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
             "build-rig": cmd_build_rig, "batch": cmd_batch, "view": cmd_view,
-            "export": cmd_export, "animate": cmd_animate, "samples": cmd_samples}
+            "export": cmd_export, "animate": cmd_animate}

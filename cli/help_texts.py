@@ -21,6 +21,17 @@ densities: sparse = 8, medium = 16, dense = 32 facial bones, or any number 1..25
 Inputs: OBJ, PLY, OFF, STL, glTF/GLB, in any frame and unit; +Y-up/+Z-front is not required.
 """
 
+SAMPLES_EPILOG = """\
+examples:
+  autobones samples s/                      then, for instance:
+  autobones place s/scan.obj -o scan.glb
+  autobones transfer s/robot.obj --landmarks s/robot.landmarks.json --arkit -o robot.glb
+  autobones animate robot.glb --capture s/take.csv -o robot.anim.glb
+
+written: default_head, scan, bust, robot, goat (.obj and .landmarks.json each), goat.pp,
+take.csv, README.md (what to try on each) and LICENSES.md (sources, licences, attribution).
+"""
+
 TRANSFER_EPILOG = """\
 examples:
   autobones transfer head.obj --landmarks head.landmarks.json -o head.glb
@@ -182,15 +193,4 @@ shape (EyeBlinkLeft ... TongueOut, ARKit's names capitalised; Left is the subjec
 HeadYaw, HeadPitch, HeadRoll, LeftEyeYaw ... RightEyeRoll in radians (optional); one row per
 frame, Timecode HH:MM:SS:FF.fff increasing. An unknown column, a bad row or a time that does not
 increase is refused (exit 2) and nothing is written.
-"""
-
-SAMPLES_EPILOG = """\
-examples:
-  autobones samples s/                      then, for instance:
-  autobones place s/scan.obj -o scan.glb
-  autobones transfer s/robot.obj --landmarks s/robot.landmarks.json --arkit -o robot.glb
-  autobones animate robot.glb --capture s/take.csv -o robot.anim.glb
-
-written: default_head, scan, bust, robot, goat (.obj and .landmarks.json each), goat.pp,
-take.csv, README.md (what to try on each) and LICENSES.md (sources, licences, attribution).
 """

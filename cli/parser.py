@@ -4,7 +4,6 @@ from __future__ import annotations
 import argparse
 
 from .help_texts import (ANIMATE_EPILOG, BATCH_EPILOG, BUILD_EPILOG, EXPORT_EPILOG, LANDMARKS_EPILOG, PLACE_EPILOG,
-                         SAMPLES_EPILOG,
                          TRANSFER_EPILOG, VIEW_EPILOG, pose_epilog)
 
 
@@ -26,6 +25,7 @@ def build_parser():
     parser.add_argument("--version", action="store_true", help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     add_place(sub)
+    add_samples(sub)  # second: what a new user runs before anything else
     add_transfer(sub)
     add_pose(sub)
     add_landmarks(sub)
@@ -34,7 +34,6 @@ def build_parser():
     add_view(sub)
     add_export(sub)
     add_animate(sub)
-    add_samples(sub)
     parser.command_parsers = sub.choices  # name -> its parser: an unknown option is that command's error
     return parser
 
@@ -57,6 +56,23 @@ def add_place(sub):
     p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")
     p.add_argument("--expressions", action="store_true", help=argparse.SUPPRESS)  # refused: place has no muscles
     _common(p)
+
+
+def add_samples(sub):
+    """The ``samples`` command's arguments."""
+    from .help_texts import SAMPLES_EPILOG
+
+    s = sub.add_parser(
+        "samples", help="write sample heads (scan, bust, cartoon, animal), their landmarks and a capture take",
+        description="Write ready inputs for every command in the documentation into DIR: the default head, a "
+                    "scan, a bust, a cartoon robot and a goat, each with its landmarks, and a short face-capture "
+                    "take (CSV); their licences and attribution in DIR/LICENSES.md.",
+        epilog=SAMPLES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("folder", metavar="DIR", help="folder to write (created; refused when it holds anything, "
+                                                 "unless --force)")
+    s.add_argument("--force", action="store_true", help="write into a folder that is not empty, replacing the "
+                                                        "sample files in it (other files are kept)")
+    _common(s)
 
 
 def add_transfer(sub):
@@ -263,21 +279,6 @@ def add_animate(sub):
                    help="frame rate of the timecode's frame field (default 60, Live Link Face's)")
     n.add_argument("--no-bones", action="store_true", help="morph-target weights only, no head and eye turns")
     _common(n)
-
-
-def add_samples(sub):
-    """The ``samples`` command's arguments."""
-    s = sub.add_parser(
-        "samples", help="write sample heads (scan, bust, cartoon, animal), their landmarks and a capture take",
-        description="Write ready inputs for every command in the documentation into DIR: the default head, a "
-                    "scan, a bust, a cartoon robot and a goat, each with its landmarks, and a short face-capture "
-                    "take (CSV); their licences and attribution in DIR/LICENSES.md.",
-        epilog=SAMPLES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    s.add_argument("folder", metavar="DIR", help="folder to write (created; refused when it holds anything, "
-                                                 "unless --force)")
-    s.add_argument("--force", action="store_true", help="write into a folder that is not empty, replacing the "
-                                                        "sample files in it (other files are kept)")
-    _common(s)
 
 
 def _axes(p, note=""):
