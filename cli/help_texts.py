@@ -43,7 +43,7 @@ output: OUT.glb (joints neck, head, jaw, eye_l, eye_r), OUT.rig.json (bones, mus
 origins and insertions, landmarks used, label class names), OUT.weights.npz (weights and
 every transferred field as field/<name>).
 
-Landmark names, frame and file formats: the landmark contract (README). Bad landmarks
+Landmark names, frame and file formats: docs/guide/transfer.md (the landmark contract). Bad landmarks
 (unknown names, left/right swapped, off the surface, wrong units, too few) are refused
 with one line naming the problem.
 """
