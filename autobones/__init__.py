@@ -14,9 +14,14 @@ import importlib.util as _util
 import os as _os
 
 # Installed, cli/ and generic_rig/ are subpackages (pyproject's package-dir); in a source checkout
-# that is not installed they sit beside this folder. Let such a checkout import them the same way.
-if _util.find_spec(__name__ + ".generic_rig") is None:
-    __path__.append(_os.path.dirname(_os.path.dirname(_os.path.abspath(__file__))))
+# they sit beside this folder. Let such a checkout import them the same way, and prefer its own copies
+# even when another checkout is installed editable (its finder would otherwise serve that one's cli/
+# to this one's autobones: a worktree on PYTHONPATH would run the main tree's commands).
+_root = _os.path.dirname(_os.path.dirname(_os.path.abspath(__file__)))
+if (_os.path.isfile(_os.path.join(_root, "cli", "commands.py"))
+        and _os.path.isfile(_os.path.join(_root, "generic_rig", "default_head.obj"))) \
+        or _util.find_spec(__name__ + ".generic_rig") is None:
+    __path__.append(_root)
 
 from .errors import AutobonesError
 from .io.mesh import load_mesh

@@ -13,7 +13,7 @@ import numbers
 import os
 
 from .arguments import float_array, index_array
-from .errors import AutobonesError
+from .errors import AutobonesError, counted
 from .orient import detect_frame as _detect_frame
 from .placement.pipeline import place as _place
 from .rig_transfer.fields import transfer_attributes as _transfer_attributes
@@ -79,7 +79,7 @@ def detect_frame(V, F, up=None, front=None, *args, **kwargs):
     # int vertices (a UFuncTypeError inside) become float64; fractional or out-of-range faces are refused
     V = float_array(V, "V", (None, 3))
     if len(V) < 4:
-        raise AutobonesError(f"V: {len(V)} vertices; a head mesh has more")
+        raise AutobonesError(f"V: {counted(len(V), 'vertex', 'vertices')}; a head mesh has more")
     F = index_array(F, "F", (None, 3), len(V))
     _check_axis(up, "up")
     _check_axis(front, "front")

@@ -18,7 +18,7 @@ import os
 
 import numpy as np
 
-from .errors import AutobonesError
+from .errors import AutobonesError, counted
 
 
 def path_argument(value, name):
@@ -52,7 +52,7 @@ def float_array(value, name, shape):
         raise AutobonesError(f"{name}: expected shape {_shape(shape)}, got {a.shape}")
     bad = ~np.isfinite(a)
     if bad.any():
-        raise AutobonesError(f"{name}: {int(bad.sum())} NaN or infinite values")
+        raise AutobonesError(f"{name}: {counted(int(bad.sum()), 'NaN or infinite value')}")
     return a
 
 
@@ -83,7 +83,7 @@ def finite_output(path, what, *arrays):
         a = np.asarray(a)
         if a.dtype.kind in "fc" and a.size and not np.isfinite(a).all():
             bad = int((~np.isfinite(a)).sum())
-            raise AutobonesError(f"{os.fspath(path) if path else what}: not written: {bad} NaN or infinite values in "
+            raise AutobonesError(f"{os.fspath(path) if path else what}: not written: {counted(bad, 'NaN or infinite value')} in "
                                  f"the {name} (out-of-range inputs); {what} is never written with them")
 
 

@@ -10,3 +10,8 @@ class AutobonesError(ValueError):
     The CLI prints the message as one line and exits with code 2; any other
     exception is a bug in autobones.
     """
+
+
+def counted(n, noun, plural=None):
+    """``"1 face"``, ``"2 faces"``: a count and its noun, agreeing, for messages (``plural`` when not noun + s)."""
+    return f"{n} {noun if n == 1 else (plural or noun + 's')}"

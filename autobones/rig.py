@@ -241,7 +241,25 @@ class Rig:
 
         ``tissue=True``: the skin refined by the layered soft tissue's equilibrium (Lee,
         Terzopoulos & Waters 1995; :mod:`autobones.expressions.tissue`): skin over shortening
-        muscles bulges, the tissue keeps its volume and stays off the skull."""
+        muscles bulges, the tissue keeps its volume and stays off the skull.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import autobones
+        >>> from autobones import samples
+        >>> rig = autobones.transfer(samples.path("robot.obj"), samples.path("robot.landmarks.json"), arkit=True)
+        >>> smile = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
+        >>> smile.shape == rig.vertices.shape, bool(np.abs(smile - rig.vertices).max() > 0)
+        (True, True)
+        >>> np.array_equal(rig.pose(), rig.vertices)     # all zero: the vertices, exactly
+        True
+        >>> blink = rig.pose(arkit={"eyeBlinkLeft": 1.0})
+        >>> rig.pose(expression="hapiness")
+        Traceback (most recent call last):
+        ...
+        autobones.errors.AutobonesError: unknown expression 'hapiness'; known: surprise, fear, happiness, sadness, disgust, anger
+        """
         offset = self.arkit_offset(arkit)
         only_arkit = (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
                       and gaze is None and look_at is None and head_deg is None and neck_deg is None)

@@ -5,6 +5,8 @@ import os
 import sys
 import time
 
+from .pose_names import check_pose_names
+from .progress import progress, stopwatch
 from .values import number, pairs, seed, vector
 
 
@@ -21,9 +23,10 @@ def cmd_place(args):
     random_state = seed(args.seed, "--seed")
     _never_the_input(_rig_outputs(out), [head, args.landmarks])
     t = time.perf_counter()
-    rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=random_state,
-                          landmarks=args.landmarks, rig=args.rig)
-    written = rig.save(out)
+    with progress(args, "placing bones"):
+        rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=random_state,
+                              landmarks=args.landmarks, rig=args.rig)
+        written = rig.save(out)
     print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
           f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
           f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
@@ -60,9 +63,14 @@ def cmd_transfer(args):
                              "autobones pose RIG.glb --tissue)")
     _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
-    rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
-                             arkit=args.arkit, symmetric=args.symmetric)
-    written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions, tissue=args.tissue)
+    with progress(args, "transferring the rig" + (" and its ARKit shapes" if args.arkit else "")):
+        rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
+                                 arkit=args.arkit, symmetric=args.symmetric)
+    watch = stopwatch()  # the transfer's own stages are logged inside it
+    with progress(args, "writing" + (" the morph targets" if args.expressions or args.expression_sides else "")):
+        written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions,
+                           tissue=args.tissue)
+    watch.lap("write")
     if rig.options.get("landmarks_source") == "detected":
         conf = rig.landmark_confidence or {}
         dropped = rig.landmarks_dropped or []
@@ -117,16 +125,25 @@ def cmd_pose(args):
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
     _never_the_input([out], [*_rig_outputs(args.rig), args.definitions])
     # read and checked before the rig: a bad file is refused without loading (or fitting) anything
+    watch = stopwatch()
     definitions = load_expressions(args.definitions) if args.definitions else None
     rig = autobones.load_rig(args.rig)
+    watch.lap("read")
     if not rig.muscles and not (arkit and rig.arkit_targets):
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
-    if definitions is not None:
-        rig.expression_model(definitions)  # pose uses the model built last
-    V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
-                 eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
-                 arkit=arkit or None, tissue=args.tissue)
+    # names checked before the skin/muscle model is built (seconds on a large head): a typo costs nothing
+    check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit)
+    if definitions is not None or au or expression or muscles or eyelids or jaw or gaze or look_at or head_deg \
+            or neck_deg or args.tissue:
+        with progress(args, "building the skin/muscle model"):
+            rig.expression_model(definitions)  # pose uses the model built last
+        watch.lap("model")
+    with progress(args, "posing"):
+        V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
+                     eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
+                     arkit=arkit or None, tissue=args.tissue)
+    watch.lap("pose")
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
                      + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
                      + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
@@ -134,6 +151,7 @@ def cmd_pose(args):
                      + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else [])
                      + [f"{k} {v:g}" for k, v in arkit.items()] + (["tissue"] if args.tissue else []))
     write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
+    watch.lap("write")
     moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0
     print(f"{out}: {what or 'neutral'}; {len(V)} vertices, largest displacement {moved:.4g} "
           f"({moved / rig.frame.size:.1%} of the head size), {time.perf_counter() - t:.1f} s")
@@ -149,13 +167,17 @@ def cmd_landmarks(args):
     out = args.output or (None if args.source and args.preview else
                           os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
     _never_the_input([out, args.preview], [args.head, args.source])
+    watch = stopwatch()
     V, F = autobones.load_mesh(args.head)
+    watch.lap("load")
     if args.source:
         frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
         lm = validate_landmarks(read_landmarks(args.source), V, F, frame=frame, min_count=1, source=args.source)
+        watch.lap("check")
         confidence, how = None, f"read from {args.source}"
     else:
-        lm = autobones.detect_landmarks((V, F), up=args.up, front=args.front, name=args.head)
+        with progress(args, "finding landmarks"):
+            lm = autobones.detect_landmarks((V, F), up=args.up, front=args.front, name=args.head)
         frame, confidence = lm.frame, lm.confidence
         how = f"found automatically, mean confidence {sum(confidence.values()) / max(len(confidence), 1):.2f}"
         if lm.dropped:
@@ -164,11 +186,24 @@ def cmd_landmarks(args):
             how += "; check " + ", ".join(sorted(lm.flagged))
     if args.preview:
         save_preview(args.preview, V, F, lm, frame=frame, confidence=confidence)
+        watch.lap("preview")
     if out:
         write_landmarks(out, lm, mesh_name=os.path.basename(args.head),
                         **({"confidence": confidence} if confidence is not None else {}))
+        watch.lap("write")
     print(f"{out or args.preview}: {len(lm)} landmarks {how}, {time.perf_counter() - t:.1f} s"
           + (f"; preview {args.preview}" if args.preview and out else ""))
+    return 0
+
+
+def cmd_samples(args):
+    from autobones.samples import write_samples
+
+    watch = stopwatch()
+    written = write_samples(args.folder, force=args.force)
+    watch.lap("write")
+    print(f"{args.folder}: {len(written)} files ({', '.join(p.name for p in written if p.suffix == '.obj')}, "
+          f"their landmarks, take.csv); licences in {os.path.join(args.folder, 'LICENSES.md')}")
     return 0
 
 
@@ -188,8 +223,11 @@ def cmd_build_rig(args):
         from autobones.arkit.studio import read_studio_shapes, write_shape_set
 
         shapes = read_studio_shapes(args.shapes)
-    rig = autobones.build_rig(args.base, args.landmarks)
-    rig.save(args.output)
+    watch = stopwatch()
+    with progress(args, "building the rig"):
+        rig = autobones.build_rig(args.base, args.landmarks)
+        rig.save(args.output)
+    watch.lap("build")
     if shapes is not None:
         write_shape_set(shapes, args.output)
     print(f"{args.output}: {len(rig.skeleton)} bones, {len(rig.muscles)} muscles, {len(rig.fields)} fields, "
@@ -207,9 +245,11 @@ def cmd_batch(args):
                            symmetric=args.symmetric, tissue=args.tissue)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
+    watch = stopwatch()
 
     def start(n_run, n_skip, n_refused):
         nonlocal bar
+        watch.lap("plan")
         import shutil
 
         from tqdm import tqdm
@@ -238,6 +278,7 @@ def cmd_batch(args):
     finally:
         if bar is not None:
             bar.close()
+    watch.lap("rig")
     if not args.quiet:
         print(summary_table(report))
         print(f"report: {os.path.join(args.output, 'batch_report.json')}")
@@ -247,7 +288,9 @@ def cmd_batch(args):
 def cmd_view(args):
     from autobones.view import make_server
 
+    watch = stopwatch()
     server = make_server(args.path, args.port)
+    watch.lap("serve")
     print(server.url, flush=True)  # first line: scripts read the URL from here
     print(f"autobones view: showing {args.path} ({server.site.mode}); Ctrl-C to stop", file=sys.stderr, flush=True)
     if not args.no_browser:
@@ -267,13 +310,17 @@ def cmd_export(args):
     from autobones.errors import AutobonesError
     from autobones.export import export_format
 
-    fmt = export_format(args.output)
+    # the output naming the input first: `export a.glb -o a.glb` is that, not a question of suffix
     _never_the_input([args.output], [args.rig, *_rig_outputs(args.rig)[1:]])
+    fmt = export_format(args.output)
     t = time.perf_counter()
     if fmt == "usd":
         from autobones.export.usd import write_usd
 
-        r = write_usd(args.rig, args.output, meters_per_unit=args.meters_per_unit)
+        watch = stopwatch()
+        with progress(args, "writing USD"):
+            r = write_usd(args.rig, args.output, meters_per_unit=args.meters_per_unit)
+        watch.lap("usd")
         errors = [f for f in r["validation"] if f[0] == "Error"]
         print(f"{r['path']}: UsdSkel, {r['joints']} joints, {r['vertices']} vertices, {r['influences']} influences per "
               f"vertex, {r['blend_shapes']} blend shapes, {r['animations']} animations; upAxis {r['up_axis']}, "
@@ -286,7 +333,10 @@ def cmd_export(args):
         raise AutobonesError("--meters-per-unit applies to USD output only")
     from autobones.export.fbx import write_fbx
 
-    r = write_fbx(args.rig, args.output)
+    watch = stopwatch()
+    with progress(args, "writing FBX in Blender"):
+        r = write_fbx(args.rig, args.output)
+    watch.lap("fbx")
     print(f"{r['path']}: FBX (Blender {r['blender']}), {r['bones']} bones, {r['vertices']} vertices, "
           f"{r['influences']} influences per vertex, {r['shape_keys']} shape keys, {r['markers']} markers, "
           f"{r['animations']} animations; {time.perf_counter() - t:.1f} s")
@@ -302,8 +352,12 @@ def cmd_animate(args):
         raise AutobonesError(f"{args.output}: the animation is written as a .glb")
     _never_the_input(_rig_outputs(args.output), [*_rig_outputs(args.rig), args.capture])
     t = time.perf_counter()
+    watch = stopwatch()
     capture = read_capture(args.capture, fps=number(args.fps, "--fps"))
-    written = save_animated_rig(args.rig, capture, args.output, bones=not args.no_bones)
+    watch.lap("capture")
+    with progress(args, "writing the animation"):
+        written = save_animated_rig(args.rig, capture, args.output, bones=not args.no_bones)
+    watch.lap("animation")
     print(f"{args.output}: {len(capture.times)} frames, {capture.times[-1]:.2f} s, {len(capture.weights)} ARKit "
           f"shapes" + ("" if args.no_bones or not capture.angles else ", head and eye turns")
           + f", {time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, "
@@ -314,12 +368,14 @@ def cmd_animate(args):
 def cmd_blender_addon(args):
     from autobones.blender_zip import write_addon_zip
 
+    watch = stopwatch()
     r = write_addon_zip(args.output)
+    watch.lap("write")
     print(f"{r['path']}: Blender add-on {r['module']} ({r['files']} files, {r['bytes']} bytes); install it in "
           f"Blender with Edit > Preferences > Add-ons > Install..., then see the sidebar's autobones tab")
     return 0
 
 
-COMMANDS = {"place": cmd_place, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
+COMMANDS = {"place": cmd_place, "samples": cmd_samples, "transfer": cmd_transfer, "pose": cmd_pose, "landmarks": cmd_landmarks,
             "build-rig": cmd_build_rig, "batch": cmd_batch, "view": cmd_view,
             "export": cmd_export, "animate": cmd_animate, "blender-addon": cmd_blender_addon}

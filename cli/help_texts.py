@@ -21,6 +21,17 @@ densities: sparse = 8, medium = 16, dense = 32 facial bones, or any number 1..25
 Inputs: OBJ, PLY, OFF, STL, glTF/GLB, in any frame and unit; +Y-up/+Z-front is not required.
 """
 
+SAMPLES_EPILOG = """\
+examples:
+  autobones samples s/                      then, for instance:
+  autobones place s/scan.obj -o scan.glb
+  autobones transfer s/robot.obj --landmarks s/robot.landmarks.json --arkit -o robot.glb
+  autobones animate robot.glb --capture s/take.csv -o robot.anim.glb
+
+written: default_head, scan, bust, robot, goat (.obj and .landmarks.json each), goat.pp,
+take.csv, README.md (what to try on each) and LICENSES.md (sources, licences, attribution).
+"""
+
 TRANSFER_EPILOG = """\
 examples:
   autobones transfer head.obj --landmarks head.landmarks.json -o head.glb
@@ -32,7 +43,7 @@ output: OUT.glb (joints neck, head, jaw, eye_l, eye_r), OUT.rig.json (bones, mus
 origins and insertions, landmarks used, label class names), OUT.weights.npz (weights and
 every transferred field as field/<name>).
 
-Landmark names, frame and file formats: the landmark contract (README). Bad landmarks
+Landmark names, frame and file formats: docs/guide/transfer.md (the landmark contract). Bad landmarks
 (unknown names, left/right swapped, off the surface, wrong units, too few) are refused
 with one line naming the problem.
 """

@@ -25,6 +25,7 @@ def build_parser():
     parser.add_argument("--version", action="store_true", help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     add_place(sub)
+    add_samples(sub)  # second: what a new user runs before anything else
     add_transfer(sub)
     add_pose(sub)
     add_landmarks(sub)
@@ -56,6 +57,23 @@ def add_place(sub):
     p.add_argument("--rig", help="generic rig folder for --landmarks (default: the built-in one)")
     p.add_argument("--expressions", action="store_true", help=argparse.SUPPRESS)  # refused: place has no muscles
     _common(p)
+
+
+def add_samples(sub):
+    """The ``samples`` command's arguments."""
+    from .help_texts import SAMPLES_EPILOG
+
+    s = sub.add_parser(
+        "samples", help="write sample heads (scan, bust, cartoon, animal), their landmarks and a capture take",
+        description="Write ready inputs for every command in the documentation into DIR: the default head, a "
+                    "scan, a bust, a cartoon robot and a goat, each with its landmarks, and a short face-capture "
+                    "take (CSV); their licences and attribution in DIR/LICENSES.md.",
+        epilog=SAMPLES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("folder", metavar="DIR", help="folder to write (created; refused when it holds anything, "
+                                                 "unless --force)")
+    s.add_argument("--force", action="store_true", help="write into a folder that is not empty, replacing the "
+                                                        "sample files in it (other files are kept)")
+    _common(s)
 
 
 def add_transfer(sub):

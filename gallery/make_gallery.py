@@ -1,6 +1,7 @@
 """Regenerate the gallery pictures from real autobones results.
 
-    python gallery/make_gallery.py            # all pictures into gallery/
+    python gallery/make_gallery.py            # all pictures into gallery/ (needs ../shared/data)
+    python gallery/make_gallery.py --out /tmp/pics --only default_head   # any folder; this one needs no shared data
     python gallery/make_gallery.py --only ict_neutral
     python gallery/make_gallery.py --only landmarks     # the four landmark previews below
     python gallery/make_gallery.py --only expressions   # the six emotions on four heads
@@ -59,6 +60,10 @@ from __future__ import annotations
 
 import argparse
 import colorsys
+import os
+import shutil
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -376,23 +381,6 @@ def symmetric_picture(out, size=360):
     print(f"{path}: the robot's happiness, symmetric fit off and auto")
 
 
-ARKIT_HEADS = {  # label: (mesh under ../shared/data, landmark file under ../shared/data or the project)
-    "james (scan)": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
-    "ICT identity002 (sculpt)": ("ict/identity002.obj", "ict/identity002.landmarks.json"),
-    "robot": ("misc/robot_head_neutral.obj", "tests/landmarks/robot_head_neutral.landmarks.json"),
-    "goat": ("misc/goathead.obj", "tests/landmarks/goathead.landmarks.json"),
-}
-ARKIT_SHAPES = ("jawOpen", "mouthSmileLeft", "eyeBlinkLeft", "browInnerUp", "mouthPucker", "cheekPuff")
-ARKIT_PICTURES = ["arkit_shapes", "arkit_capture"]
-
-
-def arkit_rig(label):
-    """The head ``label`` of :data:`ARKIT_HEADS` transferred with its ARKit shapes."""
-    mesh, marks = ARKIT_HEADS[label]
-    marks = landmark_path(marks)
-    return autobones.transfer(DATA / mesh, marks, arkit=True)
-
-
 def motion_strip(rig, poses, labels, width, note=None, moved=None):
     """Front views of ``poses`` (each (n, 3), input frame) side by side at one scale, ``width``
     pixels in all (the height follows the head's shape), the skin tinted orange by how far each
@@ -428,104 +416,7 @@ def motion_strip(rig, poses, labels, width, note=None, moved=None):
     return img, top
 
 
-def arkit_shapes_picture(out, width=2800):
-    """``arkit_shapes.png``: each head of :data:`ARKIT_HEADS` transferred with ``arkit=True``, neutral
-    and the :data:`ARKIT_SHAPES` posed at weight 1 by ``rig.pose(arkit=...)``, front view, one row a
-    head at its own scale, tinted by motion relative to the row's largest."""
-    rows = []
-    for label in ARKIT_HEADS:
-        rig = arkit_rig(label)
-        poses = [rig.vertices] + [rig.pose(arkit={n: 1.0}) for n in ARKIT_SHAPES]
-        flips = rig.arkit["flipped_triangles"]
-        img, top = motion_strip(rig, poses, ["neutral"] + list(ARKIT_SHAPES), width, note=label)
-        rows.append(img)
-        print(f"{label}: largest motion {top:.3g} (mesh units); folded triangles "
-              + ", ".join(f"{n} {flips.get(n, 0)}" for n in ARKIT_SHAPES))
-    path = Path(out) / "arkit_shapes.png"
-    render.save_png(path, np.concatenate(rows, axis=0))
-    print(f"{path}: {', '.join(ARKIT_HEADS)}; neutral, {', '.join(ARKIT_SHAPES)}")
-
-
-CAPTURE_HEAD = "ICT identity002 (sculpt)"  # key of ARKIT_HEADS
-CAPTURE_FPS = 30.0
-CAPTURE_FRAMES = {6: "blink", 21: "smile", 36: "jaw open", 53: "head turn, half smile"}  # frame: what peaks
-
-
-def write_capture_csv(path, seconds=2.0, fps=CAPTURE_FPS):
-    """A synthetic Live Link Face CSV (the layout :func:`autobones.arkit.capture.read_capture` reads):
-    a blink peaking at 0.2 s, a smile at 0.7 s, the jaw open at 1.2 s, then the head turning 20
-    degrees toward the subject's left (reached at 1.77 s, then held) with a half smile and the left
-    brow raised; smooth bumps and ramps."""
-    from autobones.arkit.names import ARKIT_NAMES, CAPTURE_ANGLES, capture_column
-
-    t = np.arange(int(round(seconds * fps))) / fps
-
-    def bump(start, end):  # 0 outside [start, end], sin^2 up to 1 at the middle
-        x = np.clip((t - start) / (end - start), 0.0, 1.0)
-        return np.sin(np.pi * x) ** 2
-
-    w = {n: np.zeros_like(t) for n in ARKIT_NAMES}
-    late = np.clip((t - 1.4) / 0.3, 0.0, 1.0)
-    for side in ("Left", "Right"):
-        w[f"eyeBlink{side}"] = bump(0.0, 0.4)
-        w[f"mouthSmile{side}"] = bump(0.4, 1.0) + 0.5 * late
-    w["jawOpen"] = 0.8 * bump(0.9, 1.5)
-    w["browOuterUpLeft"] = late
-    angles = {n: np.zeros_like(t) for n in CAPTURE_ANGLES}
-    ramp = np.clip((t - 1.3) / 0.47, 0.0, 1.0)
-    angles["HeadYaw"] = np.radians(20.0) * (3 * ramp ** 2 - 2 * ramp ** 3)
-    header = ["Timecode", "BlendShapeCount"] + [capture_column(n) for n in ARKIT_NAMES] + list(CAPTURE_ANGLES)
-    lines = [",".join(header)]
-    for i in range(len(t)):
-        s, f = divmod(i, int(fps))
-        lines.append(",".join([f"00:00:{s:02d}:{f:02d}.000", str(len(ARKIT_NAMES) + len(CAPTURE_ANGLES))]
-                              + [f"{w[n][i]:.5f}" for n in ARKIT_NAMES]
-                              + [f"{angles[n][i]:.5f}" for n in CAPTURE_ANGLES]))
-    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
-
-
-def arkit_capture_picture(out, width=2000):
-    """``arkit_capture.png``: a synthetic capture (:func:`write_capture_csv`) read by
-    ``read_capture`` and played on :data:`CAPTURE_HEAD` at the frames :data:`CAPTURE_FRAMES` (and
-    frame 0): the frame's ARKit weights posed by ``rig.pose(arkit=...)``, its head angles by the head
-    bone (``rig.pose(head_deg=...)``, linear blend skinning) with the shapes' displacements turned
-    with the head as a glTF player does (the face follows the head bone fully); front view, tinted
-    by the shapes' displacement (not the head turn, which would swamp it)."""
-    import tempfile
-
-    from autobones.arkit.animation import canonical_turns
-    from autobones.arkit.capture import read_capture
-
-    rig = arkit_rig(CAPTURE_HEAD)
-    with tempfile.TemporaryDirectory() as tmp:
-        csv_path = Path(tmp) / "synthetic_live_link_face.csv"
-        write_capture_csv(csv_path)
-        cap = read_capture(csv_path, fps=CAPTURE_FPS)
-    frames = {0: "rest", **CAPTURE_FRAMES}
-    poses, labels, moved = [], [], []
-    R, s = rig.frame.rotation, rig.frame.size
-    for i, what in frames.items():
-        weights = {n: float(v[i]) for n, v in cap.weights.items() if v[i] != 0}
-        yaw, pitch, roll = (float(cap.angles[c][i]) for c in ("HeadYaw", "HeadPitch", "HeadRoll"))
-        offset = rig.arkit_offset(weights)
-        if not (yaw or pitch or roll):
-            P = rig.vertices if offset is None else rig.vertices + offset
-        else:
-            P = rig.pose(head_deg=tuple(np.degrees([pitch, yaw, roll])))
-            if offset is not None:  # canonical displacement, turned with the head, back to the input frame
-                turn = canonical_turns([yaw], [pitch], [roll])[0]
-                P = P + ((offset @ R.T / s) @ turn.T * s) @ R
-        poses.append(P)
-        moved.append(np.zeros(len(P)) if offset is None else np.linalg.norm(offset, axis=1))
-        shown = ", ".join(f"{n} {v:.2f}" for n, v in sorted(weights.items()) if v >= 0.05) or "-"
-        turn_text = f"; head yaw {np.degrees(yaw):.0f} deg" if yaw else ""
-        labels.append(f"{cap.times[i]:.2f} s {what}")
-        print(f"frame {i} ({cap.times[i]:.2f} s, {what}): {shown}{turn_text}")
-    img, top = motion_strip(rig, poses, labels, width, moved=moved,
-                            note=f"{CAPTURE_HEAD}, {len(cap.times)} frames at {CAPTURE_FPS:g} fps")
-    path = Path(out) / "arkit_capture.png"
-    render.save_png(path, img)
-    print(f"{path}: {len(frames)} frames of {len(cap.times)}; largest shape motion {top:.3g} (mesh units)")
+ARKIT_PICTURES = ["arkit_shapes", "arkit_capture"]  # made by arkit_gallery.py
 
 
 def main(argv=None):
@@ -537,7 +428,9 @@ def main(argv=None):
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
-    ap.add_argument("--out", default=str(HERE))
+    ap.add_argument("--out", default=str(HERE), metavar="DIR",
+                    help="folder to write the pictures into (default: gallery/); it must exist. Pictures are made in "
+                         "a temporary folder inside it and moved in only when every one is made")
     args = ap.parse_args(argv)
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
@@ -547,11 +440,40 @@ def main(argv=None):
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
                                          ARKIT_PICTURES if n == "arkit" else [n])]
+    out = Path(args.out)
+    if not out.is_dir():
+        print(f"make_gallery: {out}: no such folder; create it or give another --out", file=sys.stderr)
+        return 2
+    if any(name != "default_head" for name in names) and not (DATA / "misc").is_dir():
+        # the pictures are of the shared data set's heads (only tests/data's subset travels with the clone)
+        print(f"make_gallery: needs the shared data set at {DATA} (ict/, misc/, menpo3d/, zoo/ with their "
+              "landmarks, as ../shared/data beside the repository); not found, nothing written "
+              "(--only default_head needs none)", file=sys.stderr)
+        return 2
+    staging = Path(tempfile.mkdtemp(prefix=".gallery-", dir=out))
+    try:
+        make(names, staging)
+        made = sorted(staging.glob("*.png"))
+        for path in made:  # every picture made: now they replace the old ones, each in one rename
+            os.replace(path, out / path.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    print(f"{out}: {len(made)} picture{'' if len(made) == 1 else 's'} (made in a temporary folder, then moved in)")
+    return 0
+
+
+def make(names, out):
+    """Make the pictures ``names`` into the folder ``out``."""
+    args = argparse.Namespace(out=str(out))
     for name in names:
         if name == "arkit_shapes":
+            from arkit_gallery import arkit_shapes_picture
+
             arkit_shapes_picture(args.out)
             continue
         if name == "arkit_capture":
+            from arkit_gallery import arkit_capture_picture
+
             arkit_capture_picture(args.out)
             continue
         if name == "jaw_open_goat_robot":
@@ -593,4 +515,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

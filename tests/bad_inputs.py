@@ -126,7 +126,7 @@ def mesh_cases():
     add("cloud_ply.ply", b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
                      b"end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n", "failed", "point cloud", "vertices, no faces")
     add("cloud_obj.obj", obj_bytes(V, np.zeros((0, 3), int)), "failed", "no faces", "vertices, no faces")
-    add("one_triangle.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "failed", "faces", "a single triangle")
+    add("one_triangle.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "failed", "only 1 face;", "a single triangle")
     add("flat.obj", obj_bytes(V * [1, 1, 0], F), "failed", "flat", "all z = 0: no volume")
     m = 500
     strip = np.linspace(0.0, 1.0, m)[:, None] * [0.3, 0.7, 0.9] + [0.1, 0.2, 0.3]  # on one slanted line

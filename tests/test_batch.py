@@ -120,6 +120,7 @@ def small_heads(tmp_path_factory):
     return root, base / "clean"
 
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_thirty_meshes_ten_percent_bad_then_rerun_skips(heads30, tmp_path):
     out = tmp_path / "rigs"
     before = sorted(p for p in heads30.rglob("*"))
@@ -331,6 +332,7 @@ def test_a_worker_that_dies_fails_only_its_file(tmp_path):
     assert all(got[n]["status"] == "ok" for n in ("a", "b", "c"))
 
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_hostile_mesh_corpus(tmp_path):
     cases = bad_inputs.write_mesh_corpus(tmp_path / "in")
     assert len(cases) >= 25

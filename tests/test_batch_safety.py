@@ -135,6 +135,7 @@ def test_an_output_linked_into_the_input_is_refused_and_the_input_untouched(tmp_
     assert snapshot(out) == before_out
 
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_a_link_to_a_folder_outside_the_input_is_followed(tmp_path, heads_and_clean):
     heads, clean = heads_and_clean
     elsewhere = tmp_path / "elsewhere"
@@ -186,6 +187,7 @@ def test_an_atomic_write_replaces_a_link_at_its_name_never_its_target(tmp_path):
 # --------------------------------------------------------------------------------------------------
 # 2. kill -9 of the batch process alone
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_kill_9_of_the_batch_leaves_no_process_and_a_rerun_is_byte_identical(tmp_path, heads_and_clean):
     heads, clean = heads_and_clean
     out = tmp_path / "rigs"
@@ -313,6 +315,7 @@ def test_a_dask_task_knows_when_its_batch_is_gone(tmp_path):
 # --------------------------------------------------------------------------------------------------
 # 3. two batches into one folder at once
 
+@pytest.mark.slow  # over 20 s (measured); `-m "not slow"` leaves it out
 def test_two_batches_at_once_one_refuses_naming_the_other_and_a_rerun_completes(tmp_path, heads_and_clean):
     heads, clean = heads_and_clean
     out = tmp_path / "rigs"

@@ -232,7 +232,7 @@ def test_ict_head_lacks_ear_and_jaw_landmarks():
     with pytest.raises(AutobonesError) as e:
         build_rig(V, F, lm)
     msg = str(e.value)
-    assert f"{len(missing)} landmark(s) missing" in msg
+    assert f"{len(missing)} landmarks missing" in msg
     for k in missing:
         assert k in msg
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..io.files import read_text, shown
 from .names import ARKIT_NAMES, CAPTURE_ANGLES, capture_column
 
@@ -106,7 +106,7 @@ def read_capture(path, fps=60.0):
         raise AutobonesError(f"{path}: line 1: column {dup[0]!r} appears twice")
     missing = [capture_column(n) for n in ARKIT_NAMES if capture_column(n) not in cols]
     if missing:
-        raise AutobonesError(f"{path}: line 1: no column {missing[0]!r} ({len(missing)} ARKit shapes missing)")
+        raise AutobonesError(f"{path}: line 1: no column {missing[0]!r} ({counted(len(missing), 'ARKit shape')} missing)")
     if len(rows) < 2:
         raise AutobonesError(f"{path}: no frames after the header")
     width = len(header)
@@ -114,7 +114,7 @@ def read_capture(path, fps=60.0):
     for i, row in enumerate(rows[1:]):
         line = i + 2
         if len(row) != width:
-            raise AutobonesError(f"{path}: line {line}: {len(row)} fields, the header has {width}")
+            raise AutobonesError(f"{path}: line {line}: {counted(len(row), 'field')}, the header has {width}")
         try:
             t = parse_time(row[0], fps)
         except ValueError:

@@ -45,7 +45,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import cross_rows, triangle_normals
@@ -182,8 +182,8 @@ class DeformationTransfer:
         V_src, P, V_tgt = (np.asarray(a, dtype=np.float64) for a in (V_src, P, V_tgt))
         F_src, F_tgt = np.asarray(F_src, dtype=np.int64), np.asarray(F_tgt, dtype=np.int64)
         if P.shape != V_src.shape:
-            raise AutobonesError(f"deformation transfer: {len(P)} corresponding points for {len(V_src)} "
-                                 "source vertices")
+            raise AutobonesError(f"deformation transfer: {counted(len(P), 'corresponding point')} for "
+                                 f"{counted(len(V_src), 'source vertex', 'source vertices')}")
         self.V_src_, self.F_src_ = V_src, F_src
         n_t, m_t = len(V_tgt), len(F_tgt)
         free = None if free is None else np.asarray(free, dtype=bool)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.normals import cross_rows, triangle_normals
 
 # ARKit shapes driven together with another: judged (and repaired) on top of it
@@ -177,7 +177,7 @@ def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=3000, rest_nor
     if V.ndim != 2 or V.shape[1] != 3 or D0.shape != V.shape:
         raise AutobonesError(f"fold repair: vertices {V.shape} and displacement {D0.shape} must both be (n, 3)")
     if F.ndim != 2 or F.shape[1] != 3 or (len(F) and (F.min() < 0 or F.max() >= len(V))):
-        raise AutobonesError(f"fold repair: faces {F.shape} must be (m, 3) indices of the {len(V)} vertices")
+        raise AutobonesError(f"fold repair: faces {F.shape} must be (m, 3) indices of the {counted(len(V), 'vertex', 'vertices')}")
     n = len(V)
     ctx = _Context(V, F, rest_normals) if context is None else context
     bad = folded_triangles(V, F, D0, base, ctx.rest) if folded is None else np.asarray(folded, dtype=bool)
@@ -268,7 +268,7 @@ def unfold_shapes(V, F, deltas, names, fixed=None, **options):
     D = np.asarray(deltas, dtype=np.float64)
     names = list(names)
     if len(names) != len(D):
-        raise AutobonesError(f"fold repair: {len(names)} names for {len(D)} displacement fields")
+        raise AutobonesError(f"fold repair: {counted(len(names), 'name')} for {counted(len(D), 'displacement field')}")
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     ctx = _Context(V, F)

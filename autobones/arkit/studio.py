@@ -27,7 +27,7 @@ import os
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.topology import largest_part
 from .names import ARKIT_NAMES
 from .shapes import JSON, MIN_LANDMARKS, NPZ, ShapeSet, flipped_triangles
@@ -68,7 +68,7 @@ def read_studio_shapes(folder):
     V, F = read_obj(os.path.join(folder, NEUTRAL))
     landmarks = read_landmarks(os.path.join(folder, marks[0]))
     if len(landmarks) < MIN_LANDMARKS:
-        raise AutobonesError(f"{os.path.join(folder, marks[0])}: {len(landmarks)} landmarks; the shapes need at "
+        raise AutobonesError(f"{os.path.join(folder, marks[0])}: {counted(len(landmarks), 'landmark')}; the shapes need at "
                              f"least {MIN_LANDMARKS} contract names shared with the heads")
     posed, bad = {}, []
     for f in files:

@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.normals import triangle_normals
 from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
@@ -255,7 +255,7 @@ def shared_landmarks(shapes, landmarks):
     :data:`MIN_LANDMARKS`."""
     shared = [n for n in shapes.landmarks if n in landmarks]
     if len(shared) < MIN_LANDMARKS:
-        raise AutobonesError(f"ARKit shapes: the rig has {len(shared)} landmarks shared with the shape set "
+        raise AutobonesError(f"ARKit shapes: the rig has {counted(len(shared), 'landmark')} shared with the shape set "
                              f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} are needed "
                              "(make the rig with autobones transfer)")
     return shared
@@ -326,7 +326,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     else:
         P, shared = np.asarray(correspondence, dtype=np.float64), shared_landmarks(S, lm)
         if P.shape != S.vertices.shape:
-            raise AutobonesError(f"ARKit shapes: {len(P)} corresponding points for the shape set's {len(S.vertices)} vertices")
+            raise AutobonesError(f"ARKit shapes: {counted(len(P), 'corresponding point')} for the shape set's {counted(len(S.vertices), 'vertex', 'vertices')}")
     tim = {"correspond": time.perf_counter() - t}
     names = S.names
     D = np.stack([S.deltas[n] for n in names])

@@ -77,6 +77,14 @@ def _died_record(args):
             "error_type": "WorkerDied", "seconds": None, "timings": {}, "options_hash": options_hash(options)}
 
 
+def need_dask():
+    """AutobonesError, with the install line, when Dask distributed is not installed."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise AutobonesError("--scheduler needs Dask distributed: pip install 'autobones[dask]'") from None
+
+
 def run_dask(address, fn, argsets, on_result, paths=()):
     """Run ``fn(*args)`` on the Dask distributed scheduler at ``address``; ``on_result(i, record)``.
 

@@ -184,9 +184,13 @@ def _make_rig(input_path, options, record):
     if mode == "transfer":
         # a mesh without a landmark file beside it gets automatic landmarks (human faces)
         lm = landmarks_for(input_path)
-        record["landmarks"] = lm if lm is not None else "detected"
-        return autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")),
-                                  symmetric=options.get("symmetric", "auto"))
+        if lm is not None:
+            record["landmarks"] = lm
+        rig = autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")),
+                                 symmetric=options.get("symmetric", "auto"))
+        if lm is None:  # only once they were found: a file that failed to load had none detected
+            record["landmarks"] = "detected"
+        return rig
     raise AutobonesError(f"unknown batch mode {mode!r}; use 'place' or 'transfer'")
 
 

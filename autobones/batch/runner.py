@@ -6,7 +6,7 @@ import time
 
 from ..errors import AutobonesError
 from ..io.atomic import probe_folder
-from .engines import run_dask, run_local
+from .engines import need_dask, run_dask, run_local
 from .jobs import options_hash, rig_one
 from .lock import batch_lock
 from .planning import check_folders, clean_stale_temps, plan
@@ -43,6 +43,8 @@ def run_batch(input_dir, output_dir, options, jobs=1, scheduler=None, force=Fals
     """
     if int(jobs) < 1:
         raise AutobonesError(f"--jobs {jobs}: give at least 1 worker process")
+    if scheduler:  # before the output folder is made: a refused batch leaves nothing behind
+        need_dask()
     t0 = time.perf_counter()
     inp, out = check_folders(input_dir, output_dir)
     probe_folder(out)  # up front: a folder that cannot be written fails the command, not every file

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..io.gltf import FLOAT, read_accessor, read_glb
 from ..io.rig_files import load_rig
 
@@ -138,7 +138,7 @@ def read_rig_source(path):
     n = len(rig.vertices)
     for name, d in morphs:
         if d.shape != (n, 3):
-            raise AutobonesError(f"{path}: morph target {name!r} has {len(d)} deltas for {n} vertices")
+            raise AutobonesError(f"{path}: morph target {name!r} has {counted(len(d), 'delta')} for {counted(n, 'vertex', 'vertices')}")
     src = RigSource(path=path, rig=rig, joint_names=names, parents=parents, local=local, world=world,
                     morph_targets=morphs, markers=markers)
     src.animations = [_read_animation(path, doc, body, a, i, slot, local, len(morphs))

@@ -50,7 +50,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..arguments import MAX_ANGLE, float_array, intensity_mixes, pose_angles, real
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
 from .definitions import load_expressions, model_parameters, muscle_types, parse_au_key
@@ -419,7 +419,7 @@ class ExpressionModel:
         c = float_array(np.reshape(contractions, -1) if np.ndim(contractions) else contractions, "contractions",
                         (None,))
         if c.shape != (len(self.muscle_names_),):
-            raise AutobonesError(f"contractions: expected {len(self.muscle_names_)} values, got {c.shape}")
+            raise AutobonesError(f"contractions: expected {counted(len(self.muscle_names_), 'value')}, got {c.shape}")
         Vc = self.canonical_
         d = np.tensordot(c, self.muscle_basis_, axes=1) if np.any(c) else np.zeros_like(Vc)
         # skull non-penetration: sink at most the soft-tissue thickness along the rest normal

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 
 # Rows of query points per chunk in ``transform``: chunk x k distances at a time.
 CHUNK = 8192
@@ -66,7 +66,7 @@ def landmark_arrays(src, dst):
     names = sorted(set(src) & set(dst))
     if len(names) < 4:
         raise AutobonesError(
-            f"source and target share only {len(names)} landmark names ({', '.join(names) or 'none'}); "
+            f"source and target share only {counted(len(names), 'landmark name')} ({', '.join(names) or 'none'}); "
             "a 3-D warp needs at least 4 common, well-spread landmarks (10 or more recommended)")
     P = np.array([src[n] for n in names], dtype=np.float64)
     Q = np.array([dst[n] for n in names], dtype=np.float64)
@@ -93,7 +93,7 @@ def check_landmarks(P, name="landmarks"):
     k = len(P)
     if k < 4:
         raise AutobonesError(
-            f"{name}: {k} points; a 3-D warp needs at least 4 landmarks not on one plane (10 or more recommended)")
+            f"{name}: {counted(k, 'point')}; a 3-D warp needs at least 4 landmarks not on one plane (10 or more recommended)")
     C = P - P.mean(axis=0)
     scale = np.sqrt((C**2).sum(axis=1).mean())
     if scale == 0:
@@ -174,7 +174,7 @@ class ThinPlateSpline:
         Q = as_points(dst, "target landmarks")
         if Q.shape != P.shape:
             raise AutobonesError(
-                f"source has {len(P)} landmarks but target has {len(Q)}; pass the same landmarks in the same order")
+                f"source has {counted(len(P), 'landmark')} but target has {len(Q)}; pass the same landmarks in the same order")
         reg = float(self.regularization)
         if not np.isfinite(reg) or reg < 0:
             raise AutobonesError(f"regularization must be a finite number >= 0, got {self.regularization}")

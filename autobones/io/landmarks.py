@@ -27,7 +27,7 @@ import re
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from .atomic import write_text_atomic
 from .files import read_bytes, shown
 from .landmark_checks import quoted, shorten, validate_landmarks
@@ -217,7 +217,7 @@ def _from_ljson_v1(groups, path):
 def _from_ibug(points, path, where):
     if len(points) != IBUG_COUNT:
         raise AutobonesError(
-            f"{path}: {where} holds {len(points)} points; an iBUG list needs exactly {IBUG_COUNT} "
+            f"{path}: {where} holds {counted(len(points), 'point')}; an iBUG list needs exactly {IBUG_COUNT} "
             f"(or use named landmarks: {{\"format\": \"{FORMAT}\", \"landmarks\": {{...}}}})")
     P = np.full((IBUG_COUNT, 3), np.nan)
     for i, value in enumerate(points):
@@ -280,7 +280,7 @@ def _parse_pts(body, path):
         if len(parts) == 2:
             raise AutobonesError(f"{path}:{i + 1}: 2-D point (x y); landmarks must be 3-D (x y z)")
         if len(parts) != 3:
-            raise AutobonesError(f"{path}:{i + 1}: expected 3 coordinates 'x y z', found {len(parts)} values")
+            raise AutobonesError(f"{path}:{i + 1}: expected 3 coordinates 'x y z', found {counted(len(parts), 'value')}")
         try:
             rows.append([float(p) for p in parts])
         except ValueError:
@@ -288,9 +288,9 @@ def _parse_pts(body, path):
     if not closed:
         raise AutobonesError(f"{path}: the point list is not closed with '}}'; the file is truncated")
     if n_points is not None and n_points != len(rows):
-        raise AutobonesError(f"{path}: the header says n_points: {n_points} but {len(rows)} points follow")
+        raise AutobonesError(f"{path}: the header says n_points: {n_points} but the file holds {counted(len(rows), 'point')}")
     if len(rows) != IBUG_COUNT:
-        raise AutobonesError(f"{path}: {len(rows)} points found; an iBUG .pts needs exactly {IBUG_COUNT}")
+        raise AutobonesError(f"{path}: {counted(len(rows), 'point')} found; an iBUG .pts needs exactly {IBUG_COUNT}")
     P = np.array(rows, dtype=np.float64)
     bad = np.isnan(P).any(axis=1) & ~np.isnan(P).all(axis=1)
     bad |= np.isinf(P).any(axis=1)
@@ -357,7 +357,7 @@ def _triple(value, path, what, allow_all_nan=False):
     if len(value) == 2:
         raise AutobonesError(f"{path}: {what} is 2-D [x, y]; landmarks must be 3-D [x, y, z]")
     if len(value) != 3:
-        raise AutobonesError(f"{path}: {what} has {len(value)} coordinates; expected [x, y, z]")
+        raise AutobonesError(f"{path}: {what} has {counted(len(value), 'coordinate')}; expected [x, y, z]")
     for v in value:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise AutobonesError(f"{path}: {what} has a coordinate that is not a number ({quoted(v)})")

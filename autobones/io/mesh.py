@@ -16,7 +16,7 @@ import struct
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.normals import triangle_normals
 from ..geometry.topology import used_vertices
 from .obj import read_obj
@@ -157,7 +157,7 @@ def check_mesh(V, F, name="mesh", strays=False):
     if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
         raise AutobonesError(f"{name}: no vertices found; is this a mesh file?")
     if F.size == 0:
-        raise AutobonesError(f"{name}: {len(V)} vertices but no faces; a point cloud cannot be rigged")
+        raise AutobonesError(f"{name}: {counted(len(V), 'vertex', 'vertices')} but no faces; a point cloud cannot be rigged")
     if F.ndim != 2 or F.shape[1] != 3:
         raise AutobonesError(f"{name}: faces must be triangles, got shape {F.shape}")
     if not np.issubdtype(F.dtype, np.integer):  # 1.5 would be cut to 1 by astype: a silently different mesh
@@ -170,12 +170,12 @@ def check_mesh(V, F, name="mesh", strays=False):
     bad = ~np.isfinite(V).all(axis=1)
     if bad.any():
         raise AutobonesError(
-            f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates (first: vertex {int(np.argmax(bad))})")
+            f"{name}: NaN or infinite coordinates at {counted(int(bad.sum()), 'vertex', 'vertices')} (first: vertex {int(np.argmax(bad))})")
     if F.min() < 0 or F.max() >= len(V):
         raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}), file is corrupt")
     used = used_vertices(F, len(V))
     if len(F) < 4 or len(used) < 4:
-        raise AutobonesError(f"{name}: only {len(F)} faces; a head needs a real surface")
+        raise AutobonesError(f"{name}: only {counted(len(F), 'face')}; a head needs a real surface")
     if strays:
         body = stray_parts(V, F)
         used = used if body is None else np.intersect1d(used, body.index, assume_unique=True)
@@ -336,7 +336,7 @@ def _read_trimesh(path):
         return V, F
     if not isinstance(loaded, trimesh.Trimesh):
         n = len(getattr(loaded, "vertices", []))
-        raise AutobonesError(f"{path}: {n} points but no faces; a point cloud cannot be rigged")
+        raise AutobonesError(f"{path}: {counted(n, 'point')} but no faces; a point cloud cannot be rigged")
     return np.asarray(loaded.vertices), np.asarray(loaded.faces)
 
 

@@ -15,7 +15,7 @@ import zipfile
 import numpy as np
 
 from ..arguments import path_argument
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..expressions.definitions import MODEL_DEFAULTS
 from .files import read_json, shown
 from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
@@ -59,10 +59,18 @@ def load_rig(path):
         The glb is missing, unreadable or not written by autobones, a sidecar is missing or
         corrupt, or the three files do not belong together (vertex or bone counts differ).
 
-    Example
-    -------
-    >>> rig = autobones.load_rig("head.glb")
-    >>> V = rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10)
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import autobones
+    >>> from autobones import samples
+    >>> path = os.path.join(tempfile.mkdtemp(), "robot.glb")
+    >>> saved = autobones.transfer(samples.path("robot.obj"), samples.path("robot.landmarks.json")).save(path)
+    >>> rig = autobones.load_rig(path)
+    >>> rig.skeleton.names, len(rig.muscles)
+    (['neck', 'head', 'jaw', 'eye_l', 'eye_r'], 40)
+    >>> rig.pose(au={12: 0.8, 6: 0.4}, jaw_deg=10).shape == rig.vertices.shape
+    True
     """
     path = path_argument(path, "path")  # load_rig(None): one line naming the argument, not a TypeError
     doc, body = _read_autobones_glb(path)
@@ -175,7 +183,7 @@ def _check_together(path, n, P, V, F, W, labels, names, saved_names):
         problems.append("triangle indices out of range")
     for what, a in (("glb positions", P), ("npz vertices", V), ("npz weights", W)):
         if not np.isfinite(a).all():
-            problems.append(f"the {what} hold {int((~np.isfinite(a)).sum())} NaN or infinite values")
+            problems.append(f"the {what} hold {counted(int((~np.isfinite(a)).sum()), 'NaN or infinite value')}")
     if problems:
         raise AutobonesError(f"{path}: the glb and its sidecars do not belong together: {'; '.join(problems)} "
                              "(save the rig again)")

@@ -379,6 +379,18 @@ def detect_landmarks(mesh, up=None, front=None, name=None, **options):
     AutobonesError
         No face in the pictures (animals, most cartoons, a back-of-head scan), or the
         optional detector is not installed.
+
+    Examples
+    --------
+    Needs the optional detector (``pip install 'autobones[landmarks]'``):
+
+    >>> import autobones
+    >>> from autobones import samples
+    >>> lm = autobones.detect_landmarks(samples.path("bust.obj"))
+    >>> len(lm) >= 20, "pronasale" in lm, lm["pronasale"].shape
+    (True, True, (3,))
+    >>> all(0 <= c <= 1 for c in lm.confidence.values())
+    True
     """
     V, F, source = resolve_mesh(mesh)
     return LandmarkDetector(**options).detect(V, F, what=name or source or "the head", up=up, front=front)

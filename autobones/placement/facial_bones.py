@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.cluster.vq import vq
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
@@ -98,7 +98,7 @@ class FacialBones:
         w = np.ones(len(X)) if sample_weight is None else np.asarray(sample_weight, dtype=np.float64)
         if len(X) < self.n_bones:
             raise AutobonesError(
-                f"the facial mask has {len(X)} vertices, fewer than the {self.n_bones} facial bones asked for; "
+                f"the facial mask has {counted(len(X), 'vertex', 'vertices')}, fewer than the {self.n_bones} facial bones asked for; "
                 "use a lower --density")
         rng = np.random.default_rng(self.random_state)
         best = None

@@ -54,6 +54,21 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     -------
     Rig
         In the input's own frame and units, vertices unchanged.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import autobones
+    >>> from autobones import samples
+    >>> rig = autobones.place(samples.path("robot.obj"), density="sparse")
+    >>> rig.skeleton.names[:3], len(rig.skeleton.names)
+    (['neck', 'head', 'face_00'], 10)
+    >>> rig.frame.up, rig.frame.front
+    ('+y', '+z')
+    >>> bool(abs(rig.weights.sum(axis=1) - 1).max() < 1e-6)
+    True
+    >>> [os.path.basename(p) for p in rig.save(os.path.join(tempfile.mkdtemp(), "robot.glb"))]
+    ['robot.glb', 'robot.rig.json', 'robot.weights.npz']
     """
     watch = Stopwatch()
     lap, timings = watch.lap, watch.timings

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 
 
 def _rgb_image(image):
@@ -61,7 +61,7 @@ def draw_points(image, px, labels=None, color=(255, 0, 0), radius=3, filled=True
     cols = _colors(color, k)
     fill = np.broadcast_to(np.asarray(filled, dtype=bool), (k,))
     if labels is not None and len(labels) != k:
-        raise AutobonesError(f"{len(labels)} labels for {k} points")
+        raise AutobonesError(f"{counted(len(labels), 'label')} for {counted(k, 'point')}")
     pil = Image.fromarray(image)
     draw = ImageDraw.Draw(pil)
     font = ImageFont.load_default() if labels is not None else None

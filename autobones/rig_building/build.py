@@ -78,7 +78,7 @@ import os
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..io.files import read_json
 from ..geometry.laplacian import diffuse, laplacian
 from ..geometry.ring import RING_KINDS, ring_frame, ring_profile
@@ -176,8 +176,8 @@ def build_rig(V, F, landmarks, muscles=None, frame=None):
     missing = [k for k in need if k not in landmarks]
     if missing:
         raise AutobonesError(
-            f"build_rig: {len(missing)} landmark(s) missing: {', '.join(missing)}; the skeleton, "
-            f"regions and muscles need {len(need)} contract names (autobones.rig_building.build.required_landmarks())")
+            f"build_rig: {counted(len(missing), 'landmark')} missing: {', '.join(missing)}; the skeleton, "
+            f"regions and muscles need {counted(len(need), 'contract name')} (autobones.rig_building.build.required_landmarks())")
     if frame is None:
         frame = detect_frame(V, F)
     Vc = frame.to_canonical(V)

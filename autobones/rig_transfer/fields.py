@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import clipped_cotangent_laplacian, factor_spd
 from ..geometry.topology import weld
@@ -325,6 +325,21 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     Returns
     -------
     dict of str -> array, one row per target vertex.
+
+    Examples
+    --------
+    The default head's height and an upper/lower label, carried onto the scan:
+
+    >>> import autobones
+    >>> from autobones import samples
+    >>> V, F = autobones.load_mesh(samples.path("default_head.obj"))
+    >>> fields = {"height": V[:, 1], "upper": (V[:, 1] > 0).astype(int)}
+    >>> out = autobones.transfer_attributes((V, F), samples.path("scan.obj"), fields,
+    ...                                     samples.path("default_head.landmarks.json"),
+    ...                                     samples.path("scan.landmarks.json"))
+    >>> n = len(autobones.load_mesh(samples.path("scan.obj"))[0])
+    >>> out["height"].shape == (n,), out["upper"].dtype.kind, sorted(set(out["upper"].tolist()))
+    (True, 'i', [0, 1])
     """
     from .correspondence import dense_correspondence
     from ..io.landmarks import resolve_landmarks
@@ -334,7 +349,7 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     Vt, Ft, _ = resolve_mesh(target_mesh)
     for name, f in fields.items():
         if len(f) != len(Vs):
-            raise AutobonesError(f"field {name!r} has {len(f)} rows; the source mesh has {len(Vs)} vertices")
+            raise AutobonesError(f"field {name!r} has {counted(len(f), 'row')}; the source mesh has {counted(len(Vs), 'vertex', 'vertices')}")
     P, _, _, ok = dense_correspondence(Vs, Fs, Vt, Ft, resolve_landmarks(source_landmarks)[0], resolve_landmarks(target_landmarks)[0], **fit_options)
     out, _ = transfer_fields(P, Fs, fields, Vt, Ft, source_reliable=ok, vectors=vectors, directions=directions,
                              V_rest=Vs)

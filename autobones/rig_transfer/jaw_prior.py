@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.rotations import similarity
 
 UPPER_WEIGHT = 0.05        # landmarks with less jaw weight than this place the upper face (the similarity)
@@ -225,7 +225,7 @@ def check_prior(jaw, n):
         raise AutobonesError("jaw: expected a dict with 'weight' (n,), 'pivot' (3,), 'axis' (3,) and "
                              f"optionally 'glide' (3,) (see rig_transfer.jaw_prior.jaw_prior): {exc}") from None
     if len(w) != n:
-        raise AutobonesError(f"jaw: 'weight' has {len(w)} values for a source of {n} vertices")
+        raise AutobonesError(f"jaw: 'weight' has {counted(len(w), 'value')} for a source of {counted(n, 'vertex', 'vertices')}")
     norm = np.linalg.norm(axis)
     if not (np.isfinite(w).all() and np.isfinite(pivot).all() and np.isfinite(norm) and norm > 0
             and np.isfinite(glide).all()):

@@ -39,7 +39,7 @@ from .neck import still_neck_base
 from .fields import transfer_fields
 from .symmetry import MAX_LANDMARK_MISMATCH, Symmetry
 from .under_skin import carry_muscles, under_skin_warp
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
 from ..io.mesh import resolve_mesh, stray_parts
@@ -174,6 +174,18 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     Rig
         In the head's frame and units: the rig's skeleton, skin weights, labels,
         fields and muscles on the head's own vertices.
+
+    Examples
+    --------
+    >>> import autobones
+    >>> from autobones import samples
+    >>> rig = autobones.transfer(samples.path("goat.obj"), samples.path("goat.pp"))
+    >>> rig.skeleton.names
+    ['neck', 'head', 'jaw', 'eye_l', 'eye_r']
+    >>> len(rig.muscles), len(rig.options["landmarks_used"])
+    (40, 14)
+    >>> rig.fields["jaw_weight"].shape == (len(rig.vertices),)
+    True
     """
     watch = Stopwatch()
     lap, timings = watch.lap, watch.timings
@@ -396,7 +408,7 @@ def _head_landmarks(V, F, source, landmarks, generic, up, front):
     shared = [n for n in NAMES if n in lm and n in generic.landmarks]
     if len(shared) < MIN_LANDMARKS:
         raise AutobonesError(
-            f"{where}: only {len(shared)} landmark names are shared with the generic rig "
+            f"{where}: only {counted(len(shared), 'landmark name')} {'is' if len(shared) == 1 else 'are'} shared with the generic rig "
             f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} well-spread ones are needed")
     return lm, frame, detected, shared
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.normals import triangle_normals, vertex_normals
 from ..geometry.validate import mesh_arrays
@@ -82,9 +82,9 @@ def stick(V_src, F_src, V_tgt, F_tgt, max_angle=60.0, min_area_ratio=0.01, label
     V_src, F_src = mesh_arrays(V_src, F_src, "source mesh")
     V_tgt, F_tgt = mesh_arrays(V_tgt, F_tgt, "target mesh")
     if labels is not None and len(labels) != len(V_src):
-        raise AutobonesError(f"labels: {len(labels)} values for {len(V_src)} source vertices")
+        raise AutobonesError(f"labels: {counted(len(labels), 'value')} for {counted(len(V_src), 'source vertex', 'source vertices')}")
     if face_labels is not None and len(face_labels) != len(F_tgt):
-        raise AutobonesError(f"face_labels: {len(face_labels)} values for {len(F_tgt)} target faces")
+        raise AutobonesError(f"face_labels: {counted(len(face_labels), 'value')} for {counted(len(F_tgt), 'target face')}")
     P, face, bary, _ = closest_points(V_src, V_tgt, F_tgt, labels, face_labels)
     face, bary = facing_face(P, face, bary, V_tgt, F_tgt, vertex_normals(V_src, F_src), face_labels)
     reliable = fold_free(V_src, F_src, P, V_tgt, F_tgt, face, max_angle, min_area_ratio)

@@ -1,0 +1,123 @@
+"""Sample heads to try every command on: ``autobones samples DIR`` and :func:`path`.
+
+The files come from the package's ``sample_data/`` (built by ``tools/build_samples.py`` from the
+test meshes whose licences allow redistribution; ``LICENSES.md`` there is written with them): the
+default head, a scan, a bust, a cartoon robot and a goat, each with its landmarks, and a short
+face-capture take.
+
+Examples
+--------
+>>> from autobones import samples
+>>> samples.NAMES[:4]
+('default_head.obj', 'default_head.landmarks.json', 'scan.obj', 'scan.landmarks.json')
+>>> samples.path("goat.obj").name
+'goat.obj'
+"""
+from __future__ import annotations
+
+import atexit
+import gzip
+import os
+import shutil
+import tempfile
+from importlib import resources
+from pathlib import Path
+
+from .errors import AutobonesError
+
+HEADS = ("default_head", "scan", "bust", "robot", "goat")
+# every file written, in the order the README lists them
+NAMES = tuple(n for h in HEADS for n in (f"{h}.obj", f"{h}.landmarks.json")) + ("goat.pp", "take.csv",
+                                                                                 "README.md", "LICENSES.md")
+_cache = {}
+
+
+def _data(name):
+    return resources.files("autobones").joinpath("sample_data", name)
+
+
+def _generic(name):
+    from .generic_rig import HERE
+
+    return Path(HERE) / name
+
+
+def sample_bytes(name):
+    """The content of the sample file ``name`` (one of :data:`NAMES`)."""
+    if name not in NAMES:
+        raise AutobonesError(f"{name!r} is not a sample file; the samples are {', '.join(NAMES)}")
+    if name.startswith("default_head."):
+        return _generic(name).read_bytes()
+    if name.endswith(".obj"):
+        return gzip.decompress(_data(name + ".gz").read_bytes())
+    if name == "goat.pp":
+        return _picked_points("goat.landmarks.json", "goat.obj").encode()
+    return _data(name).read_bytes()
+
+
+def _picked_points(landmarks, mesh):
+    """The landmark file as MeshLab picked points (.pp), the format ``--landmarks`` also reads."""
+    import json
+
+    points = json.loads(_data(landmarks).read_bytes())["landmarks"]
+    rows = [f' <point x="{p[0]!r}" y="{p[1]!r}" z="{p[2]!r}" active="1" name="{n}"/>' for n, p in points.items()]
+    return "\n".join(["<!DOCTYPE PickedPoints>", "<PickedPoints>", " <DocumentData>",
+                      f'  <DataFileName name="{mesh}"/>', " </DocumentData>", *rows, "</PickedPoints>", ""])
+
+
+def write_samples(folder, force=False):
+    """Write every sample file into ``folder``; returns their paths (``Path``), in :data:`NAMES` order.
+
+    ``folder`` is created when missing (its parent must exist). An existing folder that holds
+    anything is refused unless ``force`` (then the sample files in it are replaced, other files
+    kept). The files are written into a temporary folder beside it first, so a failure leaves
+    nothing half-written.
+    """
+    shown = os.fspath(folder)  # as the user wrote it, in messages
+    folder = Path(shown)
+    parent = folder.resolve().parent
+    if folder.exists() and not folder.is_dir():
+        raise AutobonesError(f"{shown}: exists and is not a folder; choose a new or empty folder")
+    if not parent.is_dir():
+        raise AutobonesError(f"{shown}: the folder {parent} does not exist; create it first")
+    full = folder.is_dir() and any(folder.iterdir())
+    if full and not force:
+        raise AutobonesError(f"{shown}: the folder is not empty; choose a new or empty folder, or add --force "
+                             "to replace the sample files in it")
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}-", dir=parent))
+    except OSError as exc:
+        raise AutobonesError(f"{shown}: cannot write in {parent} ({exc.strerror or exc})") from None
+    try:
+        for name in NAMES:
+            (staging / name).write_bytes(sample_bytes(name))
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes its folder owner-only
+        if full:  # --force into a folder with other files: replace ours one by one, keep theirs
+            for name in NAMES:
+                os.replace(staging / name, folder / name)
+        else:  # new or empty: the whole folder appears at once
+            if folder.is_dir():
+                folder.rmdir()
+            os.replace(staging, folder)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return [folder / n for n in NAMES]
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def path(name):
+    """Path of the sample file ``name`` (``"goat.obj"``, ``"take.csv"``...), written with all the
+    others into a temporary folder on first use (removed when Python exits): the doctests' inputs."""
+    if "folder" not in _cache:
+        root = tempfile.mkdtemp(prefix="autobones-samples-")
+        atexit.register(shutil.rmtree, root, True)
+        write_samples(Path(root) / "samples")
+        _cache["folder"] = Path(root) / "samples"
+    if name not in NAMES:
+        raise AutobonesError(f"{name!r} is not a sample file; the samples are {', '.join(NAMES)}")
+    return _cache["folder"] / name
