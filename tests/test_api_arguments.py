@@ -64,3 +64,19 @@ def test_whole_float_faces_and_in_range_controls_still_work(ctx):
     assert autobones.detect_frame(V, F.astype(np.float64)).size > 0
     P = ctx.rig.pose(au={12: 2.0}, head_deg=[0, 30, 0], gaze=(10, 5))
     assert np.isfinite(P).all() and np.abs(P - ctx.rig.vertices).max() > 0
+
+
+def test_arrays_out_of_range_are_not_called_a_corrupt_file(tmp_path):
+    """A (V, F) pair with a face index past its vertices names the range, and says "file is corrupt"
+    only of a file that reads so."""
+    import autobones
+    from autobones import AutobonesError
+
+    with pytest.raises(AutobonesError) as info:
+        autobones.place(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 5]] * 4))
+    assert "out of range (0..2)" in str(info.value) and "file" not in str(info.value)
+    obj = tmp_path / "bad.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n" + "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 9\n")
+    with pytest.raises(AutobonesError) as info:
+        autobones.place(str(obj))
+    assert "bad.obj" in str(info.value)

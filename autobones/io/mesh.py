@@ -89,7 +89,7 @@ def load_mesh(path, strays=False):
         else:
             why = f"{exc.__class__.__name__}: {text}"
         raise AutobonesError(f"{path}: not a readable {ext[1:].upper()} mesh ({why})") from exc
-    return check_mesh(V, F, name=name, strays=strays)
+    return check_mesh(V, F, name=name, strays=strays, from_file=True)
 
 
 def default_head():
@@ -149,10 +149,12 @@ def resolve_mesh(mesh, strays=False):
                          f"(trimesh.Trimesh) or None, got {type(mesh).__name__}")
 
 
-def check_mesh(V, F, name="mesh", strays=False):
+def check_mesh(V, F, name="mesh", strays=False, from_file=False):
     """Validate plain arrays and return them as ``(float64 (n,3), int64 (m,3))``; AutobonesError
     naming ``name`` for anything :func:`load_mesh` refuses after parsing. ``strays``: small parts
-    far from the head (:func:`stray_parts`) are left out of the outlier test (the caller drops them)."""
+    far from the head (:func:`stray_parts`) are left out of the outlier test (the caller drops them).
+    ``from_file``: the arrays were read from a file (a bad index then means the file is corrupt)."""
+    corrupt = ", file is corrupt" if from_file else ""
     V, F = _as_arrays(V, F, name)
     if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
         raise AutobonesError(f"{name}: no vertices found; is this a mesh file?")
@@ -165,14 +167,14 @@ def check_mesh(V, F, name="mesh", strays=False):
             raise AutobonesError(f"{name}: faces must be whole vertex indices, got {F.dtype} values such as "
                                  f"{float(F.ravel()[np.argmax(F.ravel() != np.round(F.ravel()))])!r}")
         if np.abs(F).max() >= 2 ** 53:
-            raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}), file is corrupt")
+            raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}){corrupt}")
     F = F.astype(np.int64)
     bad = ~np.isfinite(V).all(axis=1)
     if bad.any():
         raise AutobonesError(
             f"{name}: NaN or infinite coordinates at {counted(int(bad.sum()), 'vertex', 'vertices')} (first: vertex {int(np.argmax(bad))})")
     if F.min() < 0 or F.max() >= len(V):
-        raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}), file is corrupt")
+        raise AutobonesError(f"{name}: face indices out of range (0..{len(V) - 1}){corrupt}")
     used = used_vertices(F, len(V))
     if len(F) < 4 or len(used) < 4:
         raise AutobonesError(f"{name}: only {counted(len(F), 'face')}; a head needs a real surface")
