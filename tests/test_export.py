@@ -503,7 +503,7 @@ def test_cli_export_refuses_bad_input_in_one_line_and_writes_nothing(saved, tmp_
         (["export", lone, "-o", "x.usda"], "sidecar"),
         (["export", lone, "-o", "x.fbx"], "sidecar"),
         (["export", foreign, "-o", "x.usda"], "not a rig written by autobones"),
-        (["export", rig_copy, "-o", rig_copy], "cannot tell the format"),
+        (["export", rig_copy, "-o", rig_copy], "is the input file"),   # said before the suffix (issue #36)
         (["export", rig_copy, "-o", link], "is the input file"),
         (["export", good, "-o", tmp_path / "no_such_folder" / "x.usda"], "does not exist"),
         (["export", good, "-o", "x.fbx", "--meters-per-unit", "0.01"], "USD output only"),
