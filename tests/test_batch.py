@@ -324,6 +324,20 @@ def test_a_folder_from_an_older_batch_is_rigged_again_once(tmp_path):
     assert run_batch(heads, out, opts)["counts"] == {"ok": 0, "failed": 0, "skipped": 3}
 
 
+def test_an_old_name_that_is_another_files_new_one_is_never_removed(tmp_path):
+    """``a.rig.obj`` would once have written ``a.rig.glb``, which is now ``a.obj``'s glb: never taken for an
+    old output."""
+    heads, out = tmp_path / "heads", tmp_path / "rigs"
+    copy("misc/robot_head_neutral.obj", heads / "a.obj")
+    copy("misc/robot_head_neutral.obj", heads / "a.rig.obj")
+    out.mkdir()
+    for name in ("a.rig.glb", "a.rig.weights.npz"):  # a.obj's glb, and a sidecar of a.rig.obj's
+        (out / name).write_bytes(b"x")
+    items = {it.rel: it for it in plan(heads, out, make_options(density="sparse"))}
+    assert items["a.rig.obj"].output == str(out / "a.rig.rig.glb") and items["a.rig.obj"].stale == ()
+    assert items["a.obj"].stale == ()
+
+
 def test_symmetric_option_reaches_the_transfer_and_its_hash(tmp_path):
     """--symmetric off/on is part of a transfer batch's options (and hash); auto, the default, leaves
     the hash as it was; place refuses it."""

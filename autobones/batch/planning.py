@@ -100,7 +100,8 @@ def plan(input_dir, output_dir, options, force=False):
     for it in items:
         if it.action == "run":
             old = legacy_output(it.output)  # never another's output: ``a.rig.obj``'s old name is ``a.obj``'s new one
-            it.action, it.reason, it.stale = _state(it, options, h, force, None if old.lower() in owners else old)
+            old = None if old is None or old.lower() in owners else old
+            it.action, it.reason, it.stale = _state(it, options, h, force, old)
     # every path the batch writes or removes, resolved: the planned names, their .partial folders, the report
     written = [p for it in items for p in (*output_paths(it.output), partial_dir(it.output), *it.stale)]
     sources = [it.input for it in items] + [lm for lm in map(landmarks_for, (it.input for it in items)) if lm]
