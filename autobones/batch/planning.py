@@ -88,6 +88,10 @@ def plan(input_dir, output_dir, options, force=False):
         rel = os.path.relpath(path, inp)
         glb = os.path.join(out, output_for(rel))
         items.append(Item(input=path, rel=rel.replace(os.sep, "/"), output=glb))
+    # every path the batch writes, resolved: the planned names, their .partial folders, the report
+    written = [p for it in items for p in (*output_paths(it.output), partial_dir(it.output))]
+    sources = [it.input for it in items] + [lm for lm in map(landmarks_for, (it.input for it in items)) if lm]
+    refuse_inside_input(written + [os.path.join(out, REPORT_NAME)], inp, sources)
     owners = {}
     for it in items:
         for target in output_paths(it.output):
@@ -102,10 +106,7 @@ def plan(input_dir, output_dir, options, force=False):
             old = legacy_output(it.output)  # never another's output: ``a.rig.obj``'s old name is ``a.obj``'s new one
             old = None if old is None or old.lower() in owners else old
             it.action, it.reason, it.stale = _state(it, options, h, force, old)
-    # every path the batch writes or removes, resolved: the planned names, their .partial folders, the report
-    written = [p for it in items for p in (*output_paths(it.output), partial_dir(it.output), *it.stale)]
-    sources = [it.input for it in items] + [lm for lm in map(landmarks_for, (it.input for it in items)) if lm]
-    refuse_inside_input(written + [os.path.join(out, REPORT_NAME)], inp, sources)
+    refuse_inside_input([p for it in items for p in it.stale], inp, sources)  # and what it removes
     return items
 
 
