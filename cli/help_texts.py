@@ -86,11 +86,12 @@ examples:
                                                                 mesh; found automatically where there is none
   autobones batch heads/ -o rigs/ --scheduler tcp://scheduler.example:8786    the same, on a Dask cluster
 
-output: OUT/<path relative to INPUT_DIR without extension>.glb, .rig.json, .weights.npz per
-mesh, and OUT/batch_report.json (per file: status ok/failed/skipped, error, timings, options).
-Meshes whose outputs are up to date (newer than the input, same options) are skipped, so an
-interrupted batch is resumed by running it again. Outputs that exist but are out of date are
-overwritten only with --force. The output folder may not overlap the input folder.
+output: OUT/<path relative to INPUT_DIR without extension>.rig.glb, .rig.json, .weights.npz per
+mesh (the names place and transfer give), and OUT/batch_report.json (per file: status
+ok/failed/skipped, error, timings, options). Meshes whose outputs are up to date (newer than
+the input, same options) are skipped, so an interrupted batch is resumed by running it again.
+Outputs that exist but are out of date are overwritten only with --force. The output folder
+may not overlap the input folder.
 
 exit code: 0 when every file is ok or up to date, 1 when any file failed, 2 for a bad
 command (missing folder, overlapping folders, bad option).

@@ -201,7 +201,8 @@ def add_batch(sub):
         epilog=BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     a.add_argument("input_dir", metavar="INPUT_DIR", help="folder of meshes (OBJ, PLY, OFF, STL, glTF/GLB), "
                                                           "searched recursively; hidden files are ignored")
-    a.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder (outside INPUT_DIR)")
+    a.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder (outside INPUT_DIR): "
+                                                                        "NAME.rig.glb and its sidecars per mesh")
     a.add_argument("--density", default="medium",
                    help="facial bones for place: sparse (8), medium (16, default), dense (32) or a number")
     a.add_argument("--transfer", action="store_true",

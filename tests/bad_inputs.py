@@ -245,7 +245,7 @@ def command_cases():
     such as ``/dev/zero``, ``("sidecar", f)`` / ``("glb", f)`` (the rig's own file replaced by ``f()``),
     ``("name", file name, bytes or None)``, ``("batch_link", "folder" | "file")`` ({file} an input folder
     holding ``sub/head.obj``, {out} an output folder whose ``sub`` links to the input's ``sub``, or whose
-    ``sub/head.glb`` links to ``head.obj``) or None (no file)."""
+    ``sub/head.rig.glb`` links to ``head.obj``) or None (no file)."""
     pose = ["pose", "{rig}", "-o", "{out}.obj", "--definitions", "{file}"]
     animate = ["animate", "{rig}", "-o", "{out}.glb", "--capture", "{file}"]
     lm = ["landmarks", "{head}", "-o", "{out}.landmarks.json", "--from", "{file}"]
@@ -295,7 +295,7 @@ def command_cases():
         "batch IN -o OUT --force where OUT/sub links to IN/sub: every output resolved first, refused (was: rigs "
         "written inside IN, IN/sub/scan.glb replaced by its own rig)")
     add("batch_output_file_linked_to_input", batch, ("batch_link", "file"), "inside the input folder",
-        "batch IN -o OUT --force where OUT/sub/head.glb links to the input IN/sub/head.obj: refused")
+        "batch IN -o OUT --force where OUT/sub/head.rig.glb links to the input IN/sub/head.obj: refused")
     # argparse's own errors: one line and the command's --help (was: the usage block, 2-7 lines)
     add("argparse_missing_value", ["place", "--density"], None, "(see autobones place --help)",
         "an option without its value")
@@ -461,7 +461,7 @@ def write_command_case(folder, name, rig, transferred=None):
             (folder / "out" / "sub").symlink_to(file / "sub", target_is_directory=True)
         else:
             (folder / "out" / "sub").mkdir()
-            (folder / "out" / "sub" / "head.glb").symlink_to(file / "sub" / "head.obj")
+            (folder / "out" / "sub" / "head.rig.glb").symlink_to(file / "sub" / "head.obj")
     elif what and what[0] == "name":
         file = folder / what[1]
         if what[2] is None or isinstance(what[2], float):  # the robot at x1e200, or at the scale given
@@ -486,39 +486,41 @@ def view_cases():
 
     add("view_no_token_page", "/", 403, "the page without the token (was: 200, any local user could open it)")
     add("view_no_token_api", "/api/batch", 403, "the batch listing without the token (was: 200)")
-    add("view_no_token_file", "/files/robot.glb", 403, "a rig without the token (was: 200)")
-    add("view_wrong_token", "/{wrong}/files/robot.glb", 403, "a guessed token of the right length")
-    add("view_token_not_first", "/files/{token}/robot.glb", 403, "the token elsewhere than the first segment")
+    add("view_no_token_file", "/files/robot.rig.glb", 403, "a rig without the token (was: 200)")
+    add("view_wrong_token", "/{wrong}/files/robot.rig.glb", 403, "a guessed token of the right length")
+    add("view_token_not_first", "/files/{token}/robot.rig.glb", 403, "the token elsewhere than the first segment")
     add("view_other_file", "/{token}/files/notes.txt", 404,
         "a file of the folder that is not a rig, with the token (was: 200: every non-hidden file was served)")
     add("view_report_file", "/{token}/files/batch_report.json", 404,
         "the batch report as a file (the page reads it through /api/batch; it names the input folder)")
     add("view_input_copy", "/{token}/files/sub/head.obj", 404, "a mesh left in a sub-folder")
-    add("view_unlisted_rig", "/{token}/files/extra.glb", 404, "an autobones rig the report does not list")
-    add("view_unlisted_rig_api", "/{token}/api/rig?path=extra.glb", 404, "the same rig's facts through the API")
-    add("view_unlisted_thumb", "/{token}/api/thumb?path=extra.glb", 404, "the same rig's thumbnail")
+    add("view_unlisted_rig", "/{token}/files/extra.rig.glb", 404, "an autobones rig the report does not list")
+    add("view_unlisted_rig_api", "/{token}/api/rig?path=extra.rig.glb", 404, "the same rig's facts through the API")
+    add("view_unlisted_thumb", "/{token}/api/thumb?path=extra.rig.glb", 404, "the same rig's thumbnail")
     add("view_traversal", "/{token}/files/../secret.txt", 403, "a file outside the folder, with the token")
-    add("view_rig", "/{token}/files/robot.glb", 200, "a rig the page shows")
+    add("view_rig", "/{token}/files/robot.rig.glb", 200, "a rig the page shows")
     add("view_sidecar", "/{token}/files/robot.rig.json", 200, "its sidecar")
     add("view_weights", "/{token}/files/robot.weights.npz", 200, "its full weight matrix")
     return out
 
 
 def write_view_folder(folder, rig):
-    """``folder/rigs``: what ``view_cases`` are asked of. A batch report listing ``robot.glb`` (the rig ``rig``
-    copied in, its sidecars too), ``extra.glb`` (the same rig, not listed), ``notes.txt``, ``sub/head.obj``,
-    and ``folder/secret.txt`` beside it. Returns the rigs folder."""
+    """``folder/rigs``: what ``view_cases`` are asked of. A batch report listing ``robot.rig.glb`` (the rig
+    ``rig`` copied in, its sidecars too, named as a batch names them), ``extra.rig.glb`` (the same rig, not
+    listed), ``notes.txt``, ``sub/head.obj``, and ``folder/secret.txt`` beside it. Returns the rigs folder."""
     import shutil
+
+    from autobones.rig import sidecar_paths
 
     rigs = Path(folder) / "rigs"
     (rigs / "sub").mkdir(parents=True)
-    rig = Path(rig)
+    side, npz = sidecar_paths(rig)
     for stem in ("robot", "extra"):
-        for src in (rig, rig.with_name(rig.stem + ".rig.json"), rig.with_name(rig.stem + ".weights.npz")):
-            shutil.copy(src, rigs / src.name.replace(rig.stem, stem, 1))
+        for src, name in ((rig, f"{stem}.rig.glb"), (side, f"{stem}.rig.json"), (npz, f"{stem}.weights.npz")):
+            shutil.copy(src, rigs / name)
     report = {"format": "autobones-batch-report/1", "input": "/in", "output": str(rigs),
               "counts": {"ok": 1, "failed": 0, "skipped": 0},
-              "files": [{"input": "robot.obj", "output": "robot.glb", "status": "ok"}]}
+              "files": [{"input": "robot.obj", "output": "robot.rig.glb", "status": "ok"}]}
     (rigs / "batch_report.json").write_text(json.dumps(report))
     (rigs / "notes.txt").write_text("private notes\n")
     (rigs / "sub" / "head.obj").write_bytes(data(ROBOT).read_bytes())

@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import bad_inputs
-from autobones.batch import (REPORT_NAME, find_meshes, make_options, options_hash, plan, rig_one, run_local,
-                             summary_table)
+from autobones.batch import (REPORT_NAME, find_meshes, make_options, options_hash, plan, rig_one, run_batch,
+                             run_local, summary_table)
 from autobones.errors import AutobonesError
 from shared_data import ROOT, data
 
@@ -133,7 +133,7 @@ def test_thirty_meshes_ten_percent_bad_then_rerun_skips(heads30, tmp_path):
     for name in ("bad/empty.obj", "bad/noise.ply", "bad/nan.obj"):
         f = files[name]
         assert f["status"] == "failed" and f["error"].startswith(name), f
-        assert not (out / name).with_suffix(".glb").exists()
+        assert not (out / name).with_suffix(".rig.glb").exists()
     # each failure is one line on stderr naming the file; no traceback
     lines = [ln for ln in r.stderr.splitlines() if ln.startswith("autobones batch:")]
     assert len(lines) == 3 and "Traceback" not in r.stderr
@@ -141,9 +141,9 @@ def test_thirty_meshes_ten_percent_bad_then_rerun_skips(heads30, tmp_path):
     for name, f in files.items():
         if f["status"] == "ok":
             stem = out / Path(name).with_suffix("")
-            for suffix in (".glb", ".rig.json", ".weights.npz"):
+            for suffix in (".rig.glb", ".rig.json", ".weights.npz"):  # the names place and transfer give
                 assert Path(str(stem) + suffix).is_file(), (name, suffix)
-            assert f["output"] == Path(name).with_suffix(".glb").as_posix()
+            assert f["output"] == Path(name).with_suffix(".rig.glb").as_posix()
             assert f["timings"] and f["seconds"] > 0 and f["options"]["density"] == "sparse"
     assert sorted(p for p in heads30.rglob("*")) == before
     side = json.loads((out / "shared/misc/goathead.rig.json").read_text())
@@ -174,7 +174,7 @@ def test_kill_9_then_rerun_is_byte_identical_to_a_clean_run(small_heads, tmp_pat
         proc.wait()
     assert not (out / REPORT_NAME).exists(), "the batch finished before it could be killed"
     done = outputs(out)
-    assert 0 < len([k for k in done if k.endswith(".glb")]) < 6, sorted(done)
+    assert 0 < len([k for k in done if k.endswith(".rig.glb")]) < 6, sorted(done)
     ref = outputs(clean)
     for name, content in done.items():  # every finished file is complete; temporaries are hidden
         if not Path(name).name.startswith(".") and "/." not in name:
@@ -240,15 +240,15 @@ def test_refuses_to_overwrite_stale_outputs_without_force(tmp_path):
     r = run(args + ["4", "--force"])
     assert r.returncode == 0 and outputs(out) != first
     # the input changed after its outputs were written: out of date
-    later = (out / "a.glb").stat().st_mtime + 10   # newer than its outputs, read from the files, not a clock
+    later = (out / "a.rig.glb").stat().st_mtime + 10   # newer than its outputs, read from the files, not a clock
     os.utime(src, (later, later))
     r = run(args + ["4"])
     assert r.returncode == 1 and "older than the input" in r.stderr
     # a foreign file where an output would go
     copy("misc/goathead.obj", heads / "b.obj")
-    (out / "b.glb").write_bytes(b"not ours")
+    (out / "b.rig.glb").write_bytes(b"not ours")
     r = run(args + ["4", "--force"])
-    assert r.returncode == 0 and (out / "b.glb").read_bytes()[:4] == b"glTF"
+    assert r.returncode == 0 and (out / "b.rig.glb").read_bytes()[:4] == b"glTF"
 
 
 def test_inputs_that_would_write_the_same_output_fail_and_others_finish(tmp_path):
@@ -271,17 +271,71 @@ def test_planner_skips_only_complete_matching_outputs(tmp_path):
     copy("misc/robot_head_neutral.obj", heads / "x" / "a.obj")
     opts = make_options(density="sparse")
     [item] = plan(heads, out, opts)
-    assert item.action == "run" and item.rel == "x/a.obj" and item.output == str(out / "x" / "a.glb")
+    assert item.action == "run" and item.rel == "x/a.obj" and item.output == str(out / "x" / "a.rig.glb")
     rec = rig_one(item.input, item.output, opts)
     assert rec["status"] == "ok" and rec["options_hash"] == options_hash(opts)
     assert plan(heads, out, opts)[0].action == "skip"
     assert plan(heads, out, make_options(density="dense"))[0].action == "fail"
     assert plan(heads, out, make_options(density="dense"), force=True)[0].action == "run"
-    (out / "x" / ".a.glb.partial").mkdir()  # an interrupted write: redone without --force
+    (out / "x" / ".a.rig.glb.partial").mkdir()  # an interrupted write: redone without --force
     assert plan(heads, out, opts)[0].reason == "interrupted"
-    (out / "x" / ".a.glb.partial").rmdir()
+    (out / "x" / ".a.rig.glb.partial").rmdir()
     (out / "x" / "a.weights.npz").unlink()
     assert plan(heads, out, opts)[0].action == "fail"
+
+
+def test_outputs_are_named_as_place_and_transfer_name_theirs(tmp_path):
+    """One naming rule (issue #36): ``IN/x/a.obj`` -> ``OUT/x/a.rig.glb``, ``a.rig.json``, ``a.weights.npz``."""
+    heads, out = tmp_path / "heads", tmp_path / "rigs"
+    copy("misc/robot_head_neutral.obj", heads / "x" / "a.obj")
+    rep = run_batch(heads, out, make_options(density="sparse"))
+    assert rep["counts"]["ok"] == 1 and rep["files"][0]["output"] == "x/a.rig.glb"
+    assert sorted(p.name for p in (out / "x").iterdir()) == ["a.rig.glb", "a.rig.json", "a.weights.npz"]
+    assert not (out / "x" / "a.glb").exists()
+
+
+def test_a_folder_from_an_older_batch_is_rigged_again_once(tmp_path):
+    """Batches before the ``.rig.glb`` rule wrote ``NAME.glb`` beside the same sidecars: the next run rigs
+    those files again without --force and removes the old glb; a ``NAME.glb`` without sidecars is not ours."""
+    heads, out = tmp_path / "heads", tmp_path / "rigs"
+    for n in ("a", "b", "c"):
+        copy("misc/robot_head_neutral.obj", heads / f"{n}.obj")
+    opts = make_options(density="sparse")
+    for n in ("a", "b"):  # what an older batch wrote: the same job, the old name
+        assert rig_one(str(heads / f"{n}.obj"), str(out / f"{n}.glb"), opts)["status"] == "ok"
+    (out / ".b.glb.partial").mkdir()  # b's older run was interrupted
+    (out / "c.glb").write_bytes(b"someone else's glb")  # no sidecars: not an older batch's output
+    items = {it.rel: it for it in plan(heads, out, opts)}
+    assert items["a.obj"].action == "run" and items["a.obj"].reason.startswith("renamed: ")
+    assert items["a.obj"].stale == (str(out / "a.glb"),)
+    assert items["b.obj"].reason == "interrupted" and set(items["b.obj"].stale) == {str(out / "b.glb"),
+                                                                                       str(out / ".b.glb.partial")}
+    assert items["c.obj"].reason is None and items["c.obj"].stale == ()
+    # other options: refused like any outputs made with them, the old glb left as it was
+    assert plan(heads, out, make_options(density="dense"))[0].action == "fail"
+    rep = run_batch(heads, out, opts)
+    assert rep["counts"] == {"ok": 3, "failed": 0, "skipped": 0}
+    assert by_input(rep)["a.obj"]["reason"] == "renamed: an older batch named it a.glb; rigged again as a.rig.glb"
+    assert sorted(p.name for p in out.iterdir() if p.name != REPORT_NAME) == [
+        "a.rig.glb", "a.rig.json", "a.weights.npz", "b.rig.glb", "b.rig.json", "b.weights.npz",
+        "c.glb", "c.rig.glb", "c.rig.json", "c.weights.npz"]  # a.glb, b.glb and .b.glb.partial removed
+    assert (out / "c.glb").read_bytes() == b"someone else's glb"
+    # once: the next run skips them all
+    assert run_batch(heads, out, opts)["counts"] == {"ok": 0, "failed": 0, "skipped": 3}
+
+
+def test_an_old_name_that_is_another_files_new_one_is_never_removed(tmp_path):
+    """``a.rig.obj`` would once have written ``a.rig.glb``, which is now ``a.obj``'s glb: never taken for an
+    old output."""
+    heads, out = tmp_path / "heads", tmp_path / "rigs"
+    copy("misc/robot_head_neutral.obj", heads / "a.obj")
+    copy("misc/robot_head_neutral.obj", heads / "a.rig.obj")
+    out.mkdir()
+    for name in ("a.rig.glb", "a.rig.weights.npz"):  # a.obj's glb, and a sidecar of a.rig.obj's
+        (out / name).write_bytes(b"x")
+    items = {it.rel: it for it in plan(heads, out, make_options(density="sparse"))}
+    assert items["a.rig.obj"].output == str(out / "a.rig.rig.glb") and items["a.rig.obj"].stale == ()
+    assert items["a.obj"].stale == ()
 
 
 def test_symmetric_option_reaches_the_transfer_and_its_hash(tmp_path):
@@ -306,16 +360,16 @@ def test_rig_one_never_raises(tmp_path, monkeypatch):
     import autobones
 
     src = copy("misc/robot_head_neutral.obj", tmp_path / "a.obj")
-    rec = rig_one(str(tmp_path / "missing.obj"), str(tmp_path / "o" / "m.glb"), make_options())
+    rec = rig_one(str(tmp_path / "missing.obj"), str(tmp_path / "o" / "m.rig.glb"), make_options())
     assert rec["status"] == "failed" and rec["error_type"] == "AutobonesError" and "no such file" in rec["error"]
 
     def boom(*a, **k):
         raise RuntimeError("a bug")
 
     monkeypatch.setattr(autobones, "place", boom)
-    rec = rig_one(str(src), str(tmp_path / "o" / "a.glb"), make_options())
+    rec = rig_one(str(src), str(tmp_path / "o" / "a.rig.glb"), make_options())
     assert rec["status"] == "failed" and rec["error"] == "RuntimeError: a bug"
-    assert "Traceback" in rec["traceback"] and not (tmp_path / "o" / "a.glb").exists()
+    assert "Traceback" in rec["traceback"] and not (tmp_path / "o" / "a.rig.glb").exists()
 
 
 def test_a_worker_that_dies_fails_only_its_file(tmp_path):
@@ -324,7 +378,7 @@ def test_a_worker_that_dies_fails_only_its_file(tmp_path):
     for n in names:
         copy("misc/robot_head_neutral.obj", heads / f"{n}.obj")
     opts = make_options(density="sparse")
-    argsets = [(str(heads / f"{n}.obj"), str(tmp_path / "o" / f"{n}.glb"), opts) for n in names]
+    argsets = [(str(heads / f"{n}.obj"), str(tmp_path / "o" / f"{n}.rig.glb"), opts) for n in names]
     got = {}
     run_local(2, bad_inputs.crash_on_crash, argsets, lambda i, rec: got.setdefault(names[i], rec))
     assert sorted(got) == sorted(names)
@@ -366,13 +420,13 @@ def _check_corpus(cases, rep, stderr, out):
     for name, case in cases.items():
         f = files[name]
         assert f["status"] == case.expect, (name, f["error"], case.why)
-        glb = out / (Path(name).stem + ".glb")
+        glb = out / (Path(name).stem + ".rig.glb")
         if case.expect == "failed":
             msg = f["error"]
             assert msg.startswith(name + ":") and "\n" not in msg, msg
             assert case.needle in msg.lower(), (name, msg)
             assert [ln for ln in lines if f"batch: {name}:" in ln] == [f"autobones batch: {msg}"]
-            assert not glb.exists() and not glb.with_suffix(".rig.json").exists()
+            assert not glb.exists() and not (out / (Path(name).stem + ".rig.json")).exists()
         else:
             assert glb.is_file() and f["error"] is None
     assert not [p for p in out.rglob(".*")]  # no temporaries left

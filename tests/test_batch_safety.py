@@ -121,7 +121,7 @@ def test_an_output_linked_into_the_input_is_refused_and_the_input_untouched(tmp_
         (out / "sub").rmdir()
         (out / "sub").symlink_to(heads / "sub", target_is_directory=True)
     elif link == "file_onto_input":  # the rig's final name is a link to an input file
-        (out / "sub" / Path(name).with_suffix(".glb")).symlink_to(heads / "sub" / name)
+        (out / "sub" / Path(name).with_suffix(".rig.glb")).symlink_to(heads / "sub" / name)
     elif link == "file_into_input":  # a sidecar's final name is a link to a new name in the input folder
         (out / "sub" / Path(name).with_suffix(".rig.json")).symlink_to(heads / "sub" / "new.rig.json")
     else:
@@ -158,7 +158,7 @@ def test_a_job_resolves_its_outputs_again_before_writing(tmp_path):
     (out / "sub").symlink_to(heads / "sub", target_is_directory=True)
     name = Path(HEADS[0]).name
     before = snapshot(heads)
-    rec = rig_one(str(heads / "sub" / name), str(out / "sub" / Path(name).with_suffix(".glb")),
+    rec = rig_one(str(heads / "sub" / name), str(out / "sub" / Path(name).with_suffix(".rig.glb")),
                   make_options(density="sparse"), str(heads))
     assert rec["status"] == "failed" and "inside the input folder" in rec["error"], rec
     assert snapshot(heads) == before

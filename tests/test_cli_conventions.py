@@ -161,6 +161,28 @@ def test_batch_report_claims_no_detected_landmarks_for_a_file_that_did_not_load(
     assert rec.get("landmarks") is None
 
 
+def test_one_naming_rule_for_outputs(work, tmp_path, capsys, monkeypatch):
+    """place, transfer and batch name a head's rig alike: NAME.rig.glb, NAME.rig.json, NAME.weights.npz
+    (batch wrote NAME.glb before)."""
+    import shutil
+
+    (tmp_path / "in").mkdir()
+    for name in ("robot.obj", "robot.landmarks.json"):
+        shutil.copy(work / "s" / name, tmp_path / "in" / name)
+    expected = ["robot.rig.glb", "robot.rig.json", "robot.weights.npz"]
+    for command, extra in (("place", ["--density", "sparse"]),
+                           ("transfer", ["--landmarks", "../in/robot.landmarks.json"])):
+        (tmp_path / command).mkdir()
+        monkeypatch.chdir(tmp_path / command)
+        code, cap = _main([command, "../in/robot.obj", *extra], capsys)
+        assert code == 0, cap.err
+        assert sorted(os.listdir(tmp_path / command)) == expected, command
+    monkeypatch.chdir(tmp_path)
+    code, cap = _main(["batch", "in", "-o", "batch", "--density", "sparse", "-q"], capsys)
+    assert code == 0, cap.err
+    assert sorted(os.listdir(tmp_path / "batch")) == ["batch_report.json", *expected]
+
+
 # ---------------------------------------------------------------------------------- error strings
 
 NOUNS = ("faces", "vertices", "landmarks", "names", "points", "values", "fields", "deltas", "labels",

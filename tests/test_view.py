@@ -145,12 +145,12 @@ def test_server_refuses_traversal_writes_and_foreign_hosts(batch_dir, batch_serv
         assert b"v " not in body and b"root:" not in body
     assert s.get("/files/no_such.glb")[0] == 404
     assert s.get("/elsewhere")[0] == 404
-    status, _, body = s.get("/files/robot.glb")
-    assert status == 200 and body == (Path(batch_dir) / "robot.glb").read_bytes()
-    status, headers, body = s.request("HEAD", "/files/robot.glb")
-    assert status == 200 and body == b"" and int(headers["Content-Length"]) == (Path(batch_dir) / "robot.glb").stat().st_size
+    status, _, body = s.get("/files/robot.rig.glb")
+    assert status == 200 and body == (Path(batch_dir) / "robot.rig.glb").read_bytes()
+    status, headers, body = s.request("HEAD", "/files/robot.rig.glb")
+    assert status == 200 and body == b"" and int(headers["Content-Length"]) == (Path(batch_dir) / "robot.rig.glb").stat().st_size
     for method in ("POST", "PUT", "DELETE", "PATCH"):
-        status, headers, _ = s.request(method, "/files/robot.glb", body=b"overwritten")
+        status, headers, _ = s.request(method, "/files/robot.rig.glb", body=b"overwritten")
         assert status == 405 and headers.get("Allow") == "GET, HEAD", method
     # DNS rebinding: a page elsewhere that resolves its own name to 127.0.0.1 is refused
     assert s.get("/api/site", host="attacker.example")[0] == 403
@@ -186,11 +186,11 @@ def test_api_serves_the_rig_facts_full_weights_and_thumbnails(batch_dir, batch_s
     assert site["mode"] == "batch"
     listing = json.loads(s.get("/api/batch")[2])
     by_out = {f["output"]: f for f in listing["files"]}
-    assert set(by_out) == {"bad.glb", "robot.glb", "sub/goat.glb"}
-    assert by_out["bad.glb"]["status"] == "failed" and not by_out["bad.glb"]["viewable"]
-    assert "no faces" in by_out["bad.glb"]["error"] and "\n" not in by_out["bad.glb"]["error"]
-    assert by_out["sub/goat.glb"]["viewable"] and by_out["sub/goat.glb"]["status"] == "ok"
-    facts = json.loads(s.get("/api/rig?path=sub/goat.glb")[2])
+    assert set(by_out) == {"bad.rig.glb", "robot.rig.glb", "sub/goat.rig.glb"}
+    assert by_out["bad.rig.glb"]["status"] == "failed" and not by_out["bad.rig.glb"]["viewable"]
+    assert "no faces" in by_out["bad.rig.glb"]["error"] and "\n" not in by_out["bad.rig.glb"]["error"]
+    assert by_out["sub/goat.rig.glb"]["viewable"] and by_out["sub/goat.rig.glb"]["status"] == "ok"
+    facts = json.loads(s.get("/api/rig?path=sub/goat.rig.glb")[2])
     meta = json.loads((Path(batch_dir) / "sub" / "goat.rig.json").read_text())
     assert [b["name"] for b in facts["bones"]] == [b["name"] for b in meta["bones"]]
     assert facts["frame"]["rotation"] == meta["frame"]["rotation"] and facts["vertices"] == meta["vertex_count"]
@@ -198,17 +198,17 @@ def test_api_serves_the_rig_facts_full_weights_and_thumbnails(batch_dir, batch_s
     with np.load(Path(batch_dir) / "sub" / "goat.weights.npz") as z:
         names = [str(n) for n in z["bone_names"]]
         col = z["weights"][:, names.index("head")]
-    w = json.loads(s.get("/api/weights?path=sub/goat.glb&bone=head")[2])["weights"]
+    w = json.loads(s.get("/api/weights?path=sub/goat.rig.glb&bone=head")[2])["weights"]
     assert len(w) == len(col) and np.abs(np.array(w) - col).max() < 1e-5
-    assert s.get("/api/weights?path=sub/goat.glb&bone=nope")[0] == 404
-    assert s.get("/api/thumb?path=bad.glb")[0] == 404
-    status, headers, png = s.get("/api/thumb?path=sub/goat.glb")
+    assert s.get("/api/weights?path=sub/goat.rig.glb&bone=nope")[0] == 404
+    assert s.get("/api/thumb?path=bad.rig.glb")[0] == 404
+    status, headers, png = s.get("/api/thumb?path=sub/goat.rig.glb")
     assert status == 200 and headers["Content-Type"] == "image/png"
     img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     assert img.shape == (160, 320, 3)
     drawn = (np.abs(img - 255).sum(axis=2) > 30).mean()  # white background
     assert 0.05 < drawn < 0.9 and len(np.unique(img.reshape(-1, 3), axis=0)) > 50
-    assert s.get("/api/thumb?path=sub/goat.glb")[2] == png  # the cache (and the renderer) are deterministic
+    assert s.get("/api/thumb?path=sub/goat.rig.glb")[2] == png  # the cache (and the renderer) are deterministic
     assert _snapshot(batch_dir) == before  # read-only: no thumbnail or anything else written into the folder
 
 
@@ -245,7 +245,7 @@ def test_thumbnails_are_drawn_once_per_file_version(batch_dir, tmp_path, monkeyp
     from autobones.view import thumbnails
 
     shutil.copytree(batch_dir, tmp_path / "c")
-    glb = str(tmp_path / "c" / "robot.glb")
+    glb = str(tmp_path / "c" / "robot.rig.glb")
     calls = []
     real = thumbnails.thumbnail_png
     monkeypatch.setattr(thumbnails, "thumbnail_png", lambda p, size: calls.append(p) or real(p, size))
@@ -254,7 +254,7 @@ def test_thumbnails_are_drawn_once_per_file_version(batch_dir, tmp_path, monkeyp
     assert cache.get(glb) == a and len(calls) == 1
     os.utime(glb, ns=(0, os.stat(glb).st_mtime_ns + 10**9))  # the rig was rewritten: drawn again
     cache.get(glb)
-    cache.get(str(tmp_path / "c" / "sub" / "goat.glb"))  # max_items 1: the robot is dropped
+    cache.get(str(tmp_path / "c" / "sub" / "goat.rig.glb"))  # max_items 1: the robot is dropped
     cache.get(glb)
     assert len(calls) == 4
 
@@ -269,15 +269,41 @@ def test_batch_listing_shows_the_sidecars_warnings(batch_dir, tmp_path):
     side.write_text(json.dumps(meta))
     (folder / "sub" / "goat.rig.json").unlink()
     files = {f["output"]: f for f in batch_listing(open_site(folder))["files"]}
-    assert [w["kind"] for w in files["robot.glb"]["warnings"]] == ["landmarks dropped", "ARKit triangles turned over"]
-    assert "menton" in files["robot.glb"]["warnings"][0]["text"]
-    assert "eyeBlink_L (3)" in files["robot.glb"]["warnings"][1]["text"] and "jawOpen" not in files["robot.glb"]["warnings"][1]["text"]
-    assert [w["kind"] for w in files["sub/goat.glb"]["warnings"]] == ["rig files missing"]
-    assert not files["sub/goat.glb"]["viewable"] and files["bad.glb"]["warnings"] == []
+    assert [w["kind"] for w in files["robot.rig.glb"]["warnings"]] == ["landmarks dropped", "ARKit triangles turned over"]
+    assert "menton" in files["robot.rig.glb"]["warnings"][0]["text"]
+    assert "eyeBlink_L (3)" in files["robot.rig.glb"]["warnings"][1]["text"] and "jawOpen" not in files["robot.rig.glb"]["warnings"][1]["text"]
+    assert [w["kind"] for w in files["sub/goat.rig.glb"]["warnings"]] == ["rig files missing"]
+    assert not files["sub/goat.rig.glb"]["viewable"] and files["bad.rig.glb"]["warnings"] == []
     # without a report: every autobones glb under the folder
     (folder / "batch_report.json").unlink()
     site = open_site(folder)
-    assert site.report is None and site.rigs == ["robot.glb", "sub/goat.glb"]
+    assert site.report is None and site.rigs == ["robot.rig.glb", "sub/goat.rig.glb"]
+
+
+def test_batch_folders_named_before_the_rig_glb_rule_still_show(batch_dir, tmp_path):
+    """Batches before issue #36's naming rule wrote ``NAME.glb``: such a folder (its report naming them)
+    still lists and opens; an old ``NAME.glb`` left beside ``NAME.rig.glb`` (their sidecars shared) is
+    not listed twice."""
+    from autobones.view.site import rig_facts
+
+    folder = tmp_path / "old"
+    shutil.copytree(batch_dir, folder)
+    rep = json.loads((folder / "batch_report.json").read_text())
+    for f in rep["files"]:
+        old = f["output"].removesuffix(".rig.glb") + ".glb"
+        if (folder / f["output"]).exists():
+            (folder / f["output"]).rename(folder / old)
+        f["output"] = old
+    (folder / "batch_report.json").write_text(json.dumps(rep))
+    files = {f["output"]: f for f in batch_listing(open_site(folder))["files"]}
+    assert sorted(files) == ["bad.glb", "robot.glb", "sub/goat.glb"]
+    assert files["robot.glb"]["viewable"] and files["sub/goat.glb"]["viewable"]
+    assert rig_facts(str(folder), "sub/goat.glb")["vertices"] == files["sub/goat.glb"]["vertices"]
+    # without a report: the old names found; beside a NAME.rig.glb, only that one
+    (folder / "batch_report.json").unlink()
+    assert open_site(folder).rigs == ["robot.glb", "sub/goat.glb"]
+    shutil.copy(folder / "robot.glb", folder / "robot.rig.glb")
+    assert open_site(folder).rigs == ["robot.rig.glb", "sub/goat.glb"]
 
 
 def test_bad_inputs_are_one_line_and_exit_2(rig_dir, tmp_path):
@@ -564,27 +590,27 @@ def test_browser_batch_page_filters_and_opens_a_rig(batch_dir, browser, tmp_path
     try:
         page, errors = _open(browser, server.server.url)
         hook = "window.autobonesViewer"
-        assert sorted(page.evaluate(f"{hook}.visible()")) == ["bad.glb", "robot.glb", "sub/goat.glb"]
-        assert "no faces" in page.locator('.card[data-output="bad.glb"] .err').inner_text()
-        assert "menton" in page.locator('.card[data-output="robot.glb"] .warn').inner_text()
+        assert sorted(page.evaluate(f"{hook}.visible()")) == ["bad.rig.glb", "robot.rig.glb", "sub/goat.rig.glb"]
+        assert "no faces" in page.locator('.card[data-output="bad.rig.glb"] .err').inner_text()
+        assert "menton" in page.locator('.card[data-output="robot.rig.glb"] .warn').inner_text()
         page.wait_for_function(f"{hook}.thumbnailsLoaded() === 2", timeout=60000)
         _not_blank(page.screenshot(), min_drawn=0.05)
         page.uncheck('input[data-status="ok"]')
-        assert page.evaluate(f"{hook}.visible()") == ["bad.glb"]
+        assert page.evaluate(f"{hook}.visible()") == ["bad.rig.glb"]
         page.check('input[data-status="ok"]')
         page.select_option("#warning-filter", "some")
-        assert page.evaluate(f"{hook}.visible()") == ["robot.glb"]
+        assert page.evaluate(f"{hook}.visible()") == ["robot.rig.glb"]
         page.select_option("#warning-filter", "kind:landmarks dropped")
-        assert page.evaluate(f"{hook}.visible()") == ["robot.glb"]
+        assert page.evaluate(f"{hook}.visible()") == ["robot.rig.glb"]
         page.select_option("#warning-filter", "none")
-        assert sorted(page.evaluate(f"{hook}.visible()")) == ["bad.glb", "sub/goat.glb"]
+        assert sorted(page.evaluate(f"{hook}.visible()")) == ["bad.rig.glb", "sub/goat.rig.glb"]
         page.uncheck('input[data-status="failed"]')
         page.fill("#search", "goat")
-        assert page.evaluate(f"{hook}.visible()") == ["sub/goat.glb"]
-        page.click('.card[data-output="sub/goat.glb"]')
+        assert page.evaluate(f"{hook}.visible()") == ["sub/goat.rig.glb"]
+        page.click('.card[data-output="sub/goat.rig.glb"]')
         page.wait_for_function(f"{hook} && {hook}.mode === 'rig' && ({hook}.ready || {hook}.error)", timeout=60000)
         assert page.evaluate(f"{hook}.error") is None, errors
-        assert page.evaluate(f"{hook}.rig") == "sub/goat.glb" and "neck" in page.evaluate(f"{hook}.bones")
+        assert page.evaluate(f"{hook}.rig") == "sub/goat.rig.glb" and "neck" in page.evaluate(f"{hook}.bones")
         assert page.evaluate(f"{hook}.facts.timings")  # the batch record's timings beside the rig
         assert not errors, errors
         page.close()

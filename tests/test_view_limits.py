@@ -57,10 +57,10 @@ def test_view_case(server, view_folder, name):
 def test_token_url_redirect_and_a_fresh_token_per_server(view_folder, server):
     token = server.server.token
     assert len(token) == 22 and server.server.url.endswith(f"/{token}/")
-    status, headers, _ = server.get(f"/{token}?rig=robot.glb", token=False)
-    assert status == 301 and headers["Location"] == f"/{token}/?rig=robot.glb"  # the page's relative URLs need the /
+    status, headers, _ = server.get(f"/{token}?rig=robot.rig.glb", token=False)
+    assert status == 301 and headers["Location"] == f"/{token}/?rig=robot.rig.glb"  # the page's relative URLs need the /
     assert server.get("/", token=True)[0] == 200
-    assert server.get("/api/rig?path=robot.glb")[0] == 200 and server.get("/api/thumb?path=robot.glb")[0] == 200
+    assert server.get("/api/rig?path=robot.rig.glb")[0] == 200 and server.get("/api/thumb?path=robot.rig.glb")[0] == 200
     assert server.get("/static/app.js")[2].startswith(b"//")
     assert server.get("/", token=True)[1]["Referrer-Policy"] == "no-referrer"
     other = Serving(view_folder)

@@ -14,6 +14,9 @@ from ..io.atomic import replace_all
 
 PARTIAL_SUFFIX = ".partial"
 
+#: The glb's suffix, as ``place`` and ``transfer`` name theirs: ``INPUT/a/b.obj`` -> ``OUT/a/b.rig.glb``.
+OUTPUT_SUFFIX = ".rig.glb"
+
 #: Landmark files looked for beside ``NAME.ext`` in transfer mode, first found wins.
 LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
 
@@ -68,8 +71,20 @@ def options_hash(options):
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
+def output_for(rel):
+    """The glb a mesh ``rel`` (relative to the input folder) is rigged into, relative to the output folder:
+    ``a/b.obj`` -> ``a/b.rig.glb``, the name ``place`` and ``transfer`` give by default."""
+    return os.path.splitext(rel)[0] + OUTPUT_SUFFIX
+
+
+def legacy_output(glb_path):
+    """``x.rig.glb`` -> ``x.glb``: the name batches before the ``.rig.glb`` rule gave the glb (same sidecars)."""
+    glb_path = os.fspath(glb_path)
+    return glb_path[:-len(OUTPUT_SUFFIX)] + ".glb" if glb_path.endswith(OUTPUT_SUFFIX) else None
+
+
 def output_paths(glb_path):
-    """``x.glb`` -> (``x.glb``, ``x.rig.json``, ``x.weights.npz``), as :meth:`Rig.save` names them."""
+    """``x.rig.glb`` -> (``x.rig.glb``, ``x.rig.json``, ``x.weights.npz``), as :meth:`Rig.save` names them."""
     from ..rig import sidecar_paths
 
     return (os.fspath(glb_path), *sidecar_paths(glb_path))
@@ -86,7 +101,7 @@ def landmarks_for(mesh_path):
 
 
 def partial_dir(glb_path):
-    """The hidden folder ``DIR/.NAME.glb.partial`` a job saves into before renaming its outputs."""
+    """The hidden folder ``DIR/.NAME.rig.glb.partial`` a job saves into before renaming its outputs."""
     folder, name = os.path.split(os.fspath(glb_path))
     return os.path.join(folder, f".{name}{PARTIAL_SUFFIX}")
 
@@ -95,7 +110,7 @@ def refuse_inside_input(paths, input_root, input_files=()):
     """AutobonesError when one of ``paths``, resolved (every symbolic link on the way, the last
     one included), lies inside the folder ``input_root`` or is one of ``input_files`` (resolved too).
 
-    A link in the output tree (``OUT/sub -> INPUT/sub``, ``OUT/a.glb -> INPUT/a.glb``) would
+    A link in the output tree (``OUT/sub -> INPUT/sub``, ``OUT/a.rig.glb -> INPUT/a.glb``) would
     otherwise put outputs, temporaries included, inside the input, or a rig over its own mesh.
     """
     root = os.path.realpath(os.fspath(input_root))
@@ -126,7 +141,7 @@ def rig_one(input_path, output_path, options, input_root=None):
     input_path : str
         Mesh file (absolute, so workers elsewhere read the same file).
     output_path : str
-        Target ``.glb``; the sidecars go beside it. Parent folders are created.
+        Target glb (``NAME.rig.glb`` in a batch); the sidecars go beside it. Parent folders are created.
     options : dict
         From :func:`make_options`: ``mode`` ('place' or 'transfer'), ``density``,
         ``rig``, ``random_state``. In transfer mode the landmarks are the file

@@ -8,7 +8,8 @@ from ..errors import AutobonesError
 from ..io.files import read_json
 from ..io.atomic import BACKUP_SUFFIX
 from ..io.mesh import SUPPORTED
-from .jobs import PARTIAL_SUFFIX, landmarks_for, options_hash, output_paths, partial_dir, refuse_inside_input
+from .jobs import (PARTIAL_SUFFIX, landmarks_for, legacy_output, options_hash, output_for, output_paths, partial_dir,
+                   refuse_inside_input)
 from .report import REPORT_NAME
 
 
@@ -18,10 +19,11 @@ class Item:
 
     input: str           # absolute
     rel: str             # relative to the input folder, '/' separated
-    output: str          # absolute .glb
+    output: str          # absolute NAME.rig.glb
     action: str = "run"  # run | skip | fail
     reason: str | None = None
     record: dict = field(default_factory=dict)
+    stale: tuple = ()    # what an older batch left under the old name NAME.glb: removed once rigged again
 
 
 def check_folders(input_dir, output_dir):
@@ -73,13 +75,18 @@ def plan(input_dir, output_dir, options, force=False):
     and, without ``force``, outputs that exist but are older than the input or were
     made with other options. AutobonesError, before anything is written, when a symbolic
     link in the output tree leads any output inside the input folder or onto an input.
+
+    The glb is ``OUT/REL/NAME.rig.glb``, as ``place`` and ``transfer`` name theirs. Batches before
+    this rule wrote ``NAME.glb`` beside the same sidecars: such a file is rigged again once (even
+    when up to date), and the old glb (and an old ``.NAME.glb.partial`` folder) removed once the new
+    one is written (``Item.stale``).
     """
     inp, out = check_folders(input_dir, output_dir)
     h = options_hash(options)
     items = []
     for path in find_meshes(inp, out):
         rel = os.path.relpath(path, inp)
-        glb = os.path.join(out, os.path.splitext(rel)[0] + ".glb")
+        glb = os.path.join(out, output_for(rel))
         items.append(Item(input=path, rel=rel.replace(os.sep, "/"), output=glb))
     # every path the batch writes, resolved: the planned names, their .partial folders, the report
     written = [p for it in items for p in (*output_paths(it.output), partial_dir(it.output))]
@@ -96,17 +103,27 @@ def plan(input_dir, output_dir, options, force=False):
                                             f"{os.path.relpath(it.output, out)}; rename one of them")
     for it in items:
         if it.action == "run":
-            it.action, it.reason = _state(it, options, h, force)
+            old = legacy_output(it.output)  # never another's output: ``a.rig.obj``'s old name is ``a.obj``'s new one
+            old = None if old is None or old.lower() in owners else old
+            it.action, it.reason, it.stale = _state(it, options, h, force, old)
+    refuse_inside_input([p for it in items for p in it.stale], inp, sources)  # and what it removes
     return items
 
 
-def _state(it, options, h, force):
+def _state(it, options, h, force, old=None):
+    """(action, reason, stale) of a file not refused for a clash; ``old`` its glb's name before ``.rig.glb``."""
     targets = output_paths(it.output)
     present = [os.path.exists(t) for t in targets]
-    if os.path.isdir(partial_dir(it.output)):
-        return "run", "interrupted"
+    # an older batch's glb beside the sidecars (the new glb absent): the three files it wrote, judged so
+    renamed = old is not None and not present[0] and any(present[1:]) and os.path.isfile(old)
+    old_partial = old is not None and os.path.isdir(partial_dir(old))
+    stale = ((old,) if renamed else ()) + ((partial_dir(old),) if old_partial else ())
+    if os.path.isdir(partial_dir(it.output)) or old_partial:
+        return "run", "interrupted", stale
     if not any(present):
-        return "run", None
+        return "run", None, stale
+    if renamed:
+        targets, present = (old, *targets[1:]), [True, *present[1:]]
     why = None
     if not all(present):
         why = "some of its outputs exist (" + ", ".join(os.path.basename(t) for t, p in zip(targets, present) if p) + ")"
@@ -124,11 +141,14 @@ def _state(it, options, h, force):
             why = "its outputs were made with other options or another autobones version"
         elif oldest_out < newest_in:
             why = "its outputs are older than the input"
+        elif renamed:
+            return "run", (f"renamed: an older batch named it {os.path.basename(old)}; rigged again as "
+                           f"{os.path.basename(it.output)}"), stale
         else:
-            return "skip", "up to date"
+            return "skip", "up to date", ()
     if force:
-        return "run", f"overwritten: {why}"
-    return "fail", f"{it.rel}: {why}; pass --force to overwrite"
+        return "run", f"overwritten: {why}", stale
+    return "fail", f"{it.rel}: {why}; pass --force to overwrite", ()
 
 
 def _recorded_hash(sidecar):

@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import os
+import shutil
 import time
 
 from ..errors import AutobonesError
 from ..io.atomic import probe_folder
 from .engines import need_dask, run_dask, run_local
-from .jobs import options_hash, rig_one
+from .jobs import one_line, options_hash, refuse_inside_input, rig_one
 from .lock import batch_lock
 from .planning import check_folders, clean_stale_temps, plan
 from .report import REPORT_FORMAT, REPORT_NAME, STATUSES, public_record, write_report
@@ -69,6 +70,8 @@ def _run(items, inp, out, options, jobs, scheduler, force, on_start, on_result, 
         record = dict(record)
         if to_run[i].reason:
             record["reason"] = to_run[i].reason
+        if record.get("status") == "ok" and to_run[i].stale:
+            _remove_stale(to_run[i].stale, inp, record)
         to_run[i].record = record
         if on_result:
             on_result(public_record(record, inp, out, options))
@@ -92,6 +95,21 @@ def _run(items, inp, out, options, jobs, scheduler, force, on_start, on_result, 
     }
     write_report(os.path.join(out, REPORT_NAME), report)
     return report
+
+
+def _remove_stale(paths, inp, record):
+    """Remove what an older batch wrote under the old name (``NAME.glb``, ``.NAME.glb.partial``), now that
+    ``NAME.rig.glb`` is written; one that cannot be removed is a warning in the record, not a failure."""
+    for path in paths:
+        try:
+            refuse_inside_input((path,), inp)  # a link made since the plan must not lead us into the input
+            if os.path.isdir(path) and not os.path.islink(path):
+                shutil.rmtree(path)
+            elif os.path.lexists(path):
+                os.unlink(path)
+        except (OSError, AutobonesError) as exc:
+            text = f"{os.path.basename(path)}: the old batch output could not be removed ({one_line(exc)})"
+            record.setdefault("warnings", []).append({"kind": "old output kept", "text": text})
 
 
 def _not_run_record(it, h):

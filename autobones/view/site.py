@@ -1,9 +1,10 @@
 """What ``autobones view PATH`` shows: one rig, or a batch output folder, read (never written) as JSON facts.
 
 Beyond the seeds (issue #17): the viewer reads what ``place``, ``transfer`` and ``batch`` write. A rig is
-``x.glb`` with ``x.rig.json`` and ``x.weights.npz`` beside it (:mod:`autobones.io.rig_files`); a batch
-folder is what ``autobones batch`` writes, ``batch_report.json`` and the rigs under it
-(:mod:`autobones.batch.report`). Everything here returns plain dicts and lists ready for JSON; paths in
+``x.rig.glb`` (or any ``x.glb``) with ``x.rig.json`` and ``x.weights.npz`` beside it
+(:mod:`autobones.io.rig_files`); a batch folder is what ``autobones batch`` writes, ``batch_report.json``
+and the rigs under it, ``NAME.rig.glb`` (``NAME.glb`` from batches before that name;
+:mod:`autobones.batch.report`). Everything here returns plain dicts and lists ready for JSON; paths in
 them are relative to the folder served, '/'-separated. Coordinates are the rig's input frame and units.
 """
 from __future__ import annotations
@@ -123,14 +124,22 @@ def glb_generator(path):
 
 
 def find_rigs(root):
-    """Every glb written by autobones under ``root`` (recursively, hidden names skipped), relative, sorted."""
+    """Every glb written by autobones under ``root`` (recursively, hidden names skipped), relative, sorted.
+
+    ``x.glb`` and ``x.rig.glb`` share the sidecars ``x.rig.json`` and ``x.weights.npz``: with both
+    there (an older batch's name beside the one batches write now), only ``x.rig.glb`` is listed.
+    """
     found = []
     for folder, dirs, files in os.walk(root):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        names = set(files)
         for name in sorted(files):
             if name.startswith(".") or not name.lower().endswith(".glb"):
                 continue
             p = os.path.join(folder, name)
+            if not name.lower().endswith(".rig.glb") and name[:-4] + ".rig.glb" in names \
+                    and glb_generator(os.path.join(folder, name[:-4] + ".rig.glb")) == "autobones":
+                continue  # x.glb beside x.rig.glb: the sidecars are the newer rig's
             if glb_generator(p) == "autobones":
                 found.append(os.path.relpath(p, root).replace(os.sep, "/"))
     return found
