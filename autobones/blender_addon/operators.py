@@ -269,13 +269,5 @@ CLASSES = (AUTOBONES_OT_rig, AUTOBONES_OT_add_landmark, AUTOBONES_OT_snap_landma
            AUTOBONES_OT_reset_pose)
 
 
-def register():
-    """Register the operators."""
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    """Undo :func:`register`."""
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+# Blender's own helper: registers CLASSES in order, unregisters them in reverse
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

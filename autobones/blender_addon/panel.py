@@ -107,13 +107,5 @@ class AUTOBONES_PT_pose(_Sidebar, bpy.types.Panel):
 CLASSES = (AUTOBONES_PT_rig, AUTOBONES_PT_landmarks, AUTOBONES_PT_pose)
 
 
-def register():
-    """Register the panels."""
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    """Undo :func:`register`."""
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+# Blender's own helper: registers CLASSES in order, unregisters them in reverse
+register, unregister = bpy.utils.register_classes_factory(CLASSES)
