@@ -187,7 +187,9 @@ class UI:
         if self.ticks == 3:
             _shot("progress.png")
         if result.rig_armature(self.obj) is None:
-            return self.ticks < 200
+            # transfer --arkit takes ~15 s alone; on a loaded machine (2 cores, a test run beside) several
+            # times that: wait up to 400 s (1,000 ticks) before giving up
+            return self.ticks < 1000
         return False
 
     def pose(self):

@@ -214,7 +214,7 @@ def test_the_rig_button_runs_in_the_background_with_progress_in_blenders_window(
     run = subprocess.run([xvfb, "-a", "-s", "-screen 0 1600x1000x24", blender, "--factory-startup",
                           "--enable-event-simulate", str(empty), "--python", str(script), "--", "ui",
                           str(tmp_path / "autobones_blender.zip"), sys.executable, str(HEAD), str(LANDMARKS),
-                          str(tmp_path)], capture_output=True, text=True, timeout=300, env=env)
+                          str(tmp_path)], capture_output=True, text=True, timeout=600, env=env)
     log = run.stdout + run.stderr
     assert run.returncode == 0 and "Traceback" not in log, log[-3000:]
     seen = json.loads((tmp_path / "ui.json").read_text())
