@@ -403,7 +403,7 @@ def test_batch_transfer_with_expressions_and_its_options_hash(tmp_path, capsys):
     out = tmp_path / "out"
     code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--expressions", "-q"], tmp_path, capsys)
     assert code == 0, err
-    assert len(_targets(out / "a.glb")[0]) == len(AUS)
+    assert len(_targets(out / "a.rig.glb")[0]) == len(AUS)
     report = json.loads((out / "batch_report.json").read_text())
     assert report["options"]["expressions"] is True
     code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--expressions", "-q"], tmp_path, capsys)
@@ -413,7 +413,7 @@ def test_batch_transfer_with_expressions_and_its_options_hash(tmp_path, capsys):
     assert code == 1 and "a.obj" in err
     code, _, err = _cli(["batch", src, "-o", out, "--transfer", "--force", "-q"], tmp_path, capsys)
     assert code == 0, err
-    assert "targets" not in read_glb(out / "a.glb")[0]["meshes"][0]["primitives"][0]
+    assert "targets" not in read_glb(out / "a.rig.glb")[0]["meshes"][0]["primitives"][0]
     code, _, err = _cli(["batch", src, "-o", tmp_path / "p", "--expressions"], tmp_path, capsys)
     assert code == 2 and "add --transfer" in err and not (tmp_path / "p").exists()
 
