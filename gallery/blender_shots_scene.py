@@ -29,7 +29,7 @@ POSES = {"rest": {}, "jawOpen": {"jawOpen": 0.8}, "smile": {"mouthSmileLeft": 1.
          "blink_brows": {"eyeBlinkLeft": 1.0, "eyeBlinkRight": 1.0, "browInnerUp": 1.0}}
 
 
-SEEN = {"draws": {}, "status": []}  # what the window showed: panel draws, status-bar lines (ui.json)
+SEEN = {"draws": {}, "status": [], "lines": []}  # panel draws, status-bar lines, the job's -v lines (ui.json)
 
 
 def _watch():
@@ -47,6 +47,7 @@ def _watch():
         line = status(job)
         if not SEEN["status"] or SEEN["status"][-1] != line:
             SEEN["status"].append(line)
+        SEEN["lines"] = list(job.lines)   # every stage the job read, shown or not (the bar shows the latest)
         return line
     runner.Job.status = shown
 
