@@ -32,3 +32,20 @@ class _Rigs:
 @pytest.fixture(scope="session")
 def rigs():
     return _Rigs()
+
+
+def _measured_slow():
+    """Node ids listed in tests/slow_tests.txt (measured by tools/slow_tests.py)."""
+    from pathlib import Path
+
+    lines = (Path(__file__).parent / "slow_tests.txt").read_text().splitlines()
+    return {line.strip() for line in lines if line.strip() and not line.startswith("#")}
+
+
+def pytest_collection_modifyitems(config, items):
+    # the tests a measured full run found slow (>= 2 s) join the ones marked by hand, so that
+    # `pytest -m "not slow"` is a few-minute run (README, Tests)
+    slow = _measured_slow()
+    for item in items:
+        if item.nodeid in slow:
+            item.add_marker(pytest.mark.slow)
