@@ -47,9 +47,16 @@ def _watch():
         line = status(job)
         if not SEEN["status"] or SEEN["status"][-1] != line:
             SEEN["status"].append(line)
-        SEEN["lines"] = list(job.lines)   # every stage the job read, shown or not (the bar shows the latest)
         return line
     runner.Job.status = shown
+    result = runner.Job.result
+
+    def finished(job):
+        try:
+            return result(job)   # drains the job's pipes first
+        finally:
+            SEEN["lines"] = list(job.lines)   # every stage the job read, shown or not (the bar shows the latest)
+    runner.Job.result = finished
 
 
 def _counted(draw, name):
