@@ -33,7 +33,6 @@ report; judging the numbers is the caller's job.
 """
 import json
 import math
-import struct
 import sys
 
 import bpy
@@ -47,26 +46,24 @@ ROTATION_DEG = 30.0
 # still uses ``np.bool``, which numpy 1.24 removed (Debian 12 ships numpy 1.24 with
 # Blender 3.4.1): every import with default shading fails with AttributeError. Restore
 # the alias so the importer runs with its default options.
+
+def _addon_module(name):
+    """The add-on's own ``name``.py, loaded by path (Blender runs this file as a script, outside the package):
+    the glb reader and the vertex-group weights the add-on and the FBX export use."""
+    import importlib.util
+    import os
+
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "autobones", "blender_addon", name + ".py")
+    spec = importlib.util.spec_from_file_location("autobones_addon_" + name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+glb_file, vertex_groups = _addon_module("glb"), _addon_module("vertex_groups")
+
 if "bool" not in vars(np):  # (hasattr would itself warn on numpy 1.24)
     np.bool = bool
-
-
-def read_glb(path):
-    """(JSON document, BIN chunk) of a binary glTF."""
-    with open(path, "rb") as fh:
-        data = fh.read()
-    magic, _, _ = struct.unpack_from("<4sII", data, 0)
-    assert magic == b"glTF", f"{path}: not a binary glTF"
-    off, doc, body = 12, None, b""
-    while off < len(data):
-        length, kind = struct.unpack_from("<I4s", data, off)
-        chunk = data[off + 8:off + 8 + length]
-        if kind == b"JSON":
-            doc = json.loads(chunk)
-        elif kind == b"BIN\0":
-            body = chunk
-        off += 8 + length
-    return doc, body
 
 
 def accessor(doc, body, index):
@@ -97,17 +94,6 @@ def evaluated_positions(obj):
     P = np.array([to_file_frame(M @ v.co) for v in mesh.vertices], dtype=np.float64)
     ev.to_mesh_clear()
     return P
-
-
-def group_weights(obj, names):
-    """(n, len(names)) weights of the mesh's vertex groups, 0 where absent."""
-    col = {obj.vertex_groups[n].index: j for j, n in enumerate(names) if n in obj.vertex_groups}
-    W = np.zeros((len(obj.data.vertices), len(names)))
-    for v in obj.data.vertices:
-        for g in v.groups:
-            if g.group in col:
-                W[v.index, col[g.group]] = g.weight
-    return W
 
 
 def shape_key_report(obj, doc, body, P_file, rest, tree_file):
@@ -155,7 +141,7 @@ def shape_key_report(obj, doc, body, P_file, rest, tree_file):
 
 def main(argv):
     glb, report_path = argv
-    doc, body = read_glb(glb)
+    doc, body = glb_file.read_glb(glb)
     prim = doc["meshes"][0]["primitives"][0]
     P_file = accessor(doc, body, prim["attributes"]["POSITION"]).astype(np.float64)
     used = np.unique(accessor(doc, body, prim["indices"]))
@@ -182,7 +168,7 @@ def main(argv):
     report["bone_parents"] = {b.name: (b.parent.name if b.parent else None) for b in arm.data.bones}
 
     # vertex groups
-    W = group_weights(obj, names)
+    W = vertex_groups.read_full_weights(obj, names)
     report["vertex_groups"] = {n: {"exists": n in obj.vertex_groups, "vertices": int((W[:, j] > 0).sum())}
                                for j, n in enumerate(names)}
     report["extra_vertex_groups"] = [g.name for g in obj.vertex_groups if g.name not in names]
