@@ -21,8 +21,8 @@ Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
   tragions: within 0.15 ex-ex of the occiput-C1 centre. 5 weights (P, T): weighted, sum 1, no NaN;
   glTF: the Khronos validator's errors (as-is only). 6 corr (T): p95 offset of the generic vertices'
   points on the remeshed / decimated / stray copies (mapped back by closest point) from the as-is ones
-  <= 1% ex-ex; "6 corr rot" the same on rotated and scaled copies (mapped back exactly). 7 ARKit (humans, as-is): no triangle turned over, eyeBlinkLeft
-  closes >= 90% of the lid gap. 8 landmarks (humans, as-is): automatic detection runs.
+  <= 1% ex-ex; "6 corr rot" the same on rotated and scaled copies (mapped back exactly). 7 ARKit (humans, every
+  variant): no triangle turned over, eyeBlinkLeft brings the upper lid margin >= 90% of the way to the lower. 8 landmarks (humans, as-is): automatic detection runs.
 A cell: ``ok``, ``n/a: why``, ``-`` (not applicable), or the worst failing figure with the variant it came
 from and how many other variants failed (``up 47° [rot3 +2]``).
 """
@@ -192,7 +192,7 @@ def transfer_checks(head, var, rig, details, checks):
                                           var.back, var.snap)
         column = "6 corr" if var.snap or var.name == "stray" else "6 corr rot"
         out[column] = zc.check_correspondence(p95 / head.unit)
-    if 7 in checks and var.name == "as-is" and head.human:
+    if 7 in checks and head.human:
         out["7 ARKit"] = guarded(zc.check_arkit, rig, var.truth, var.R @ head.up)
     return out
 
@@ -221,7 +221,7 @@ def rig_checks(head, var, checks, folder):
     tp = time.perf_counter() - t
     if want_transfer:
         details = {}
-        arkit = 7 in checks and var.name == "as-is" and head.human
+        arkit = 7 in checks and head.human
         trig, terr = attempt(lambda: autobones.transfer((var.V, var.F), var.lm, details=details, arkit=arkit))
         if terr is not None:
             cells.update({c: NO_RIG for c in ("2 jaw", "3 neck T", "4 pivot T", "6 corr", "6 corr rot", "7 ARKit")})
@@ -237,7 +237,7 @@ def rig_checks(head, var, checks, folder):
                            merge({"P": prig and guarded(validate, prig, folder, "place"),
                                   "T": trig and guarded(validate, trig, folder, "transfer")}))
     log(f"  {head.name} {var.name}: {len(var.V)} vertices, place {tp:.1f} s, total {time.perf_counter() - t:.1f} s"
-        + "".join(f"; {c} {r.text}" for c, r in cells.items() if r is not None and r.status != "ok"))
+        + "".join(f"; {c} {r.text}" for c, r in cells.items() if r is not None and r.text != "ok"))
     return cells
 
 

@@ -403,8 +403,8 @@ def check_correspondence(p95_unit):
 # ------------------------------------------------------------------------------------- check 7
 def check_arkit(rig, lm, up):
     """No triangle turned over by any ARKit shape at weight 1 (``mouthClose`` on top of ``jawOpen``);
-    ``eyeBlinkLeft`` closes >= 90% of the left lid gap (:func:`autobones.arkit.lids.gap_closure`,
-    between the palpebrale landmarks' surface points)."""
+    ``eyeBlinkLeft`` closes >= 90% of the left lid gap (:func:`autobones.arkit.lids.gap_closure`'s
+    ``margins``: from the upper margin at palpebrale superius to the lower margin across from it)."""
     targets = rig.arkit_targets or {}
     if not targets:
         return Result("fail", "no ARKit shapes", 1.0)
@@ -420,9 +420,13 @@ def check_arkit(rig, lm, up):
         fails.append((f"folds {sum(folds.values())} ({worst} {folds[worst]}"
                       + (f" +{len(folds) - 1} shapes)" if len(folds) > 1 else ")"), 1.0 + sum(folds.values())))
     if "l" in eye_sides(lm) and "eyeBlinkLeft" in targets:
-        closed = gap_closure(V, F, targets["eyeBlinkLeft"], lm, "l", up)["points"]
+        # the upper margin's way to the lower margin across from it (``points``, to the lower landmark,
+        # also counts the two landmarks' offset along the eye, which no closing removes)
+        closed = gap_closure(V, F, targets["eyeBlinkLeft"], lm, "l", up)["margins"]
         if closed < BLINK_MIN:
             fails.append((f"blink {closed:.0%}", 1 + BLINK_MIN - closed))
+        elif not fails:
+            return Result("ok", f"ok (blink {closed:.0%})")
     elif not fails:
         return Result("ok", "ok (no lid landmarks)")
     return Result.of(fails)

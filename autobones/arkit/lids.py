@@ -114,7 +114,9 @@ def margin_curves(V, F, landmarks, side, t, faces=None):
     return C.reshape(2, h, 3), (R[:h], R[h:])
 
 
-def _skin_faces(V, F):
+def skin_faces(V, F):
+    """Triangles (indices into ``F`` (m, 3)) of the largest connected part: the skin, without
+    separate eyeballs, teeth or lashes. ``V`` (n, 3)."""
     part = mesh_parts(len(V), F)
     return np.flatnonzero(part[F[:, 0]] == np.argmax(np.bincount(part)))
 
@@ -168,7 +170,7 @@ class LidClosure:
         F_src, F_tgt = np.asarray(F_src, dtype=np.int64), np.asarray(F_tgt, dtype=np.int64)
         self.sides_ = [s for s in eye_sides(lm_src) if s in eye_sides(lm_tgt)]
         self.t_ = np.linspace(0.0, 1.0, self.samples + 2)[1:-1]
-        skin_s, skin_t = _skin_faces(V_src, F_src), _skin_faces(V_tgt, F_tgt)
+        skin_s, skin_t = skin_faces(V_src, F_src), skin_faces(V_tgt, F_tgt)
         n_t = len(V_tgt)
         self._src, self._turn, self._tgt = [], [], []
         verts, low, tv, sv, gaps, side_of = [], [], [], [], [], []
@@ -311,11 +313,15 @@ def gap_closure(V, F, D, landmarks, side, up=None):
     * ``vertices``: ``1 - |gap after| / |gap before|`` between the skin vertices nearest the two
       landmarks (on a coarse mesh these may sit an edge apart sideways, which no blink closes);
     * ``points``: the same between the landmarks' own surface points, ``D`` interpolated there;
-    * ``vertical``: the landmark points' gap along ``up`` only.
+    * ``vertical``: the landmark points' gap along ``up`` only;
+    * ``margins``: between the upper margin at ``palpebrale_superius`` and the lower margin
+      across from it (:func:`margin_curves`, the same ``t``): how far the upper margin came to the
+      lower one. ``points`` also counts the two landmarks' offset along the eye (they need not
+      face each other), which no closing removes.
     """
     V, D = np.asarray(V, dtype=np.float64), np.asarray(D, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    faces = _skin_faces(V, F)
+    faces = skin_faces(V, F)
     skin = np.unique(F[faces])
     Q = np.array([landmarks[f"palpebrale_superius_{side}"], landmarks[f"palpebrale_inferius_{side}"]],
                  dtype=np.float64)
@@ -326,6 +332,10 @@ def gap_closure(V, F, D, landmarks, side, up=None):
     d = np.einsum("kcd,kc->kd", D[F[faces][face]], bary)
     g0, g1 = C[0] - C[1], C[0] + d[0] - C[1] - d[1]
     out["points"] = 1.0 - np.linalg.norm(g1) / max(np.linalg.norm(g0), 1e-300)
+    t = canthal_parameter(Q[:1], landmarks, side)
+    M, (Ru, Rl) = margin_curves(V, F, landmarks, side, t, faces)
+    g0, g1 = M[0, 0] - M[1, 0], M[0, 0] - M[1, 0] + ((Ru - Rl) @ D)[0]
+    out["margins"] = 1.0 - np.linalg.norm(g1) / max(np.linalg.norm(g0), 1e-300)
     if up is not None:
         up = np.asarray(up, dtype=np.float64)
         out["vertical"] = 1.0 - float(g1 @ up) / (float(g0 @ up) or 1e-300)

@@ -32,6 +32,8 @@ from ..geometry.topology import mesh_parts
 from .copy_baseline import copy_displacements
 from .deformation_transfer import DeformationTransfer
 from .folds import ON_TOP, folded_triangles, unfold_shapes
+from ..rig_transfer.eyes import fit_sphere
+from .lid_meet import meet_lids
 from .lids import LidClosure, eye_sides, margin_points
 from .names import ARKIT_NAMES, EYE_LOOK
 from .shapes import MIN_LANDMARKS, flipped_triangles, load_shapes
@@ -280,7 +282,7 @@ def shape_correspondence(shapes, V, F, landmarks, **fit_options):
 
 
 def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_folds=True, free_lips=True,
-                  correspondence=None, **fit_options):
+                  correspondence=None, meet_blinks=True, **fit_options):
     """Displacements of the 52 ARKit shapes on a transferred rig's vertices, and their record.
 
     Parameters
@@ -303,6 +305,9 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         Let the lips of a closed mouth part (:func:`mouth_fissure`); False for comparison.
     correspondence : (n_s, 3) float, optional
         :func:`shape_correspondence`'s ``P`` for this rig and set, when already computed.
+    meet_blinks : bool
+        Bring the blinks' lid margins together on the head's own lids (:func:`autobones.arkit.lid_meet.meet_lids`,
+        deformation only); False: the blinks as carried (for comparison).
     **fit_options
         Passed to :func:`dense_correspondence`, over :data:`CORRESPONDENCE`.
 
@@ -343,6 +348,15 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         X[:, keep] = 0.0
     else:
         raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
+    names = list(names)
+    met = {}
+    if method == "deformation" and meet_blinks:
+        # the blinks' margins brought together on the head's own lids (the gradients leave them apart)
+        t = time.perf_counter()
+        balls = [fit_sphere(V[m]) for m in eyes.values()]
+        blinks, met = meet_lids(V, F, lm, dict(zip(names, X)), eyeballs=balls)
+        X = np.stack([blinks[n] for n in names])
+        tim["lids"] = tim.get("lids", 0.0) + time.perf_counter() - t
     # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose
     # on top of jawOpen); rounded first to the float32 the glb stores, so the counts are of what is written
     t = time.perf_counter()
@@ -395,6 +409,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         "left_right": "Left is the subject's own left (ARKit's convention)",
         "landmarks_used": shared,
         "absent": [n for n in ARKIT_NAMES if n not in S.deltas],
+        # per blink the lids were closed on: the fraction of the rest gap its margins leave open
+        "lids_meet": {n: round(v, 4) for n, v in met.items()},
         "eyes": ("eyeLook* turn the separate eyeballs about " + ", ".join(sorted(eyes)) + " by "
                  + ", ".join(f"{k.lower()} {v:g} deg" for k, v in EYE_TURN_DEG.items())) if eyes else
                 "no separate eyeballs: eyeLook* move the lids and eye surface as the skin transfer gives",
