@@ -159,6 +159,13 @@ def cmd_pose(args):
 
 
 def cmd_landmarks(args):
+    if args.edit:
+        return _edit_landmarks(args)
+    from autobones.errors import AutobonesError
+
+    for given, option in ((args.pp, "--pp"), (args.port, "--port"), (args.no_browser, "--no-browser")):
+        if given:
+            raise AutobonesError(f"{option} goes with --edit (the landmark editor in the browser)")
     import autobones
     from autobones.io.landmarks import read_landmarks, validate_landmarks, write_landmarks
     from autobones.landmarks.preview import save_preview
@@ -193,6 +200,43 @@ def cmd_landmarks(args):
         watch.lap("write")
     print(f"{out or args.preview}: {len(lm)} landmarks {how}, {time.perf_counter() - t:.1f} s"
           + (f"; preview {args.preview}" if args.preview and out else ""))
+    return 0
+
+
+def _edit_landmarks(args):
+    """``landmarks HEAD --edit``: serve the editor until the page says done or Ctrl-C."""
+    from autobones.errors import AutobonesError
+    from autobones.view.editor_server import make_editor_server
+    from autobones.view.landmark_session import open_session
+    from autobones.view.server import parse_port
+
+    if args.preview:
+        raise AutobonesError("--preview draws landmarks from a file; with --edit, save them first, then "
+                             "autobones landmarks HEAD --from SAVED --preview PNG")
+    port = parse_port(args.port if args.port is not None else 0)  # refused before the mesh is read
+    watch = stopwatch()
+    with progress(args, "reading the head" + ("" if args.source else " and finding landmarks")):
+        session = open_session(args.head, output=args.output, pp=args.pp, source=args.source, up=args.up,
+                               front=args.front)
+    watch.lap("load")
+    server = make_editor_server(session, port)
+    watch.lap("serve")
+    print(server.url, flush=True)  # first line: scripts read the URL from here
+    print(f"autobones landmarks: editing {args.head}; Save writes {session.output}"
+          + (f" and {session.pp_output}" if session.pp_output else "") + "; Done on the page or Ctrl-C stops",
+          file=sys.stderr, flush=True)
+    if not args.no_browser:
+        import webbrowser
+
+        webbrowser.open(server.url)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        print("autobones landmarks: stopped", file=sys.stderr)
+    finally:
+        server.server_close()
+    print(f"autobones landmarks: saved {', '.join(session.saved)}" if session.saved
+          else "autobones landmarks: closed without saving; nothing written", file=sys.stderr)
     return 0
 
 
