@@ -149,6 +149,12 @@ def landmark_problems(landmarks, V, F, frame=None, min_count=10, max_off_surface
     return {"names": names_out, "set": set_out}
 
 
+def landmark_values(landmarks, source="landmarks"):
+    """Contract names with 3 finite numbers each, as (3,) float64 copies in :data:`NAMES` order; one
+    AutobonesError for unknown names or bad values. Only these checks: none of the set or the mesh."""
+    return _values(landmarks, source)
+
+
 def _values(landmarks, source):
     """Contract names and 3 finite numbers each: (3,) float64 copies in :data:`NAMES` order."""
     if not isinstance(landmarks, Mapping):

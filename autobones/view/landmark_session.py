@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from ..io.atomic import check_destination, refuse_overwriting_inputs
-from ..io.landmark_checks import landmark_problems, validate_landmarks
+from ..io.landmark_checks import landmark_problems, landmark_values
 from ..io.landmark_names import GROUPS, NAMES, mirror_name, where
 from ..orient import detect_frame, frame_from_landmarks
 from ..rig_transfer.pipeline import MIN_LANDMARKS  # the fewest landmarks transfer takes: the page's "too few"
@@ -81,7 +81,7 @@ class EditSession:
             # the page draws V - center (float32 keeps its precision near the head) and adds center back
             "center": [float(c) for c in (lo + hi) / 2], "size": float((hi - lo).max()),
             "up": [float(c) for c in self.frame.rotation[1]], "front": [float(c) for c in self.frame.rotation[2]],
-            "min_count": MIN_LANDMARKS, "assist_needs": list(ASSIST_NEEDS),
+            "min_count": MIN_LANDMARKS, "assist_needs": list(ASSIST_NEEDS), "assist_error": assist_missing(),
         }
 
     def mesh_bytes(self):
@@ -91,7 +91,7 @@ class EditSession:
 
     def parse(self, landmarks):
         """The page's ``{name: [x, y, z]}`` as contract names and finite (3,) arrays; AutobonesError otherwise."""
-        return validate_landmarks(landmarks, min_count=0, source="the page's landmarks")
+        return landmark_values(landmarks, "the page's landmarks")
 
     def problems(self, landmarks):
         """Per-name problems of the page's landmarks, as ``transfer`` would judge them (module docstring)."""
@@ -119,11 +119,10 @@ class EditSession:
         missing = [n for n in ASSIST_NEEDS if n not in lm]
         if missing:
             raise AutobonesError(f"the proposal needs {', '.join(missing)} placed first")
-        try:
-            from ..landmarks.assist import assist_landmarks
-        except ImportError:
-            raise AutobonesError("assisted proposals are not available: this autobones has no "
-                                 "autobones.landmarks.assist") from None
+        if assist_missing():
+            raise AutobonesError(assist_missing())
+        from ..landmarks.assist import assist_landmarks
+
         got = assist_landmarks(self.V, self.F, {n: lm[n] for n in ASSIST_NEEDS})
         points = {n: [float(c) for c in np.asarray(p, dtype=np.float64).reshape(3)]
                   for n, p in got.points.items() if n in NAMES and n not in lm}
@@ -148,6 +147,15 @@ class EditSession:
             write_picked_points(self.pp_output, lm, mesh_name=mesh)
         self.saved = outs
         return outs
+
+
+def assist_missing():
+    """None when :mod:`autobones.landmarks.assist` can be imported, else one line saying it cannot."""
+    import importlib.util
+
+    if importlib.util.find_spec("autobones.landmarks.assist") is None:
+        return "assisted proposals are not available: this autobones has no autobones.landmarks.assist"
+    return None
 
 
 def _side(name):

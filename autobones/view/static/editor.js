@@ -115,7 +115,9 @@ async function proposeMirror(name) {
   } catch (err) { showError(err); }
 }
 
-function assistReady() { return facts.assist_needs.every((n) => marks.has(n) && marks.get(n).kind === 'placed'); }
+function assistReady() {
+  return !facts.assist_error && facts.assist_needs.every((n) => marks.has(n) && marks.get(n).kind === 'placed');
+}
 
 async function proposeRest() {
   assistOffered = true;
@@ -158,7 +160,7 @@ function buildList(side) {
   side.append(
     el('div', { id: 'toolbar' },
       button('undo', 'undo', undo, 'Ctrl+Z'), button('redo', 'redo', redo, 'Ctrl+Shift+Z'),
-      button('assist', 'propose the rest', proposeRest, `from ${facts.assist_needs.join(', ')}`),
+      button('assist', 'propose the rest', proposeRest, facts.assist_error || `from ${facts.assist_needs.join(', ')}`),
       button('accept-all', 'accept proposals', () => change(() => { for (const m of marks.values()) m.kind = 'placed'; })),
       button('remove', 'remove selected', () => selected && marks.has(selected) && change(() => marks.delete(selected))),
       button('save', 'save', save, `write ${facts.output}`), button('done', 'done', done, 'stop the editor')),
@@ -271,7 +273,9 @@ function buildScene(view, buf) {
     ndc.set(((x - r.left) / r.width) * 2 - 1, -((y - r.top) / r.height) * 2 + 1);
     ray.setFromCamera(ndc, camera);
   }
-  function surfaceAt(x, y) {  // the mesh point under a client pixel, mesh frame, or null
+  function surfaceAt(x, y) {  // the mesh point under a client pixel, mesh frame, or null (off the canvas too)
+    const r = renderer.domElement.getBoundingClientRect();
+    if (x < r.left || x >= r.right || y < r.top || y >= r.bottom) return null;
     aim(x, y);
     const hit = ray.intersectObject(mesh, false)[0];
     return hit ? [hit.point.x + c[0], hit.point.y + c[1], hit.point.z + c[2]] : null;
@@ -282,8 +286,9 @@ function buildScene(view, buf) {
     return hit ? hit.object.name : null;
   }
 
-  // pointer: on a marker, drag it along the surface (orbit off meanwhile); elsewhere, a click without
-  // movement places the selected name, a drag turns the view
+  // pointer: on a marker, drag it along the surface (orbit off meanwhile); a click on a marker without
+  // movement selects its name, or places the selected name there when it is that marker's (accepting a
+  // proposal where it is clicked); elsewhere, a click places the selected name, a drag turns the view
   let drag = null, down = null;
   const canvas = renderer.domElement;
   canvas.addEventListener('pointerdown', (e) => {  // capture: runs before the orbit controls see the event
@@ -291,13 +296,13 @@ function buildScene(view, buf) {
     const name = markerAt(e.clientX, e.clientY);
     if (name) {
       controls.enabled = false;
-      drag = { name, before: snapshot(), moved: false };
-      select(name);
+      drag = { name, before: snapshot(), moved: false, x: e.clientX, y: e.clientY, was: selected };
       canvas.setPointerCapture(e.pointerId);
     } else down = { x: e.clientX, y: e.clientY };
   }, { capture: true });
   canvas.addEventListener('pointermove', (e) => {
-    if (!drag) return;
+    if (!drag || (!drag.moved && Math.hypot(e.clientX - drag.x, e.clientY - drag.y) <= 3)) return;
+    if (!drag.moved) select(drag.name);
     const p = surfaceAt(e.clientX, e.clientY);
     if (!p) return;
     const m = marks.get(drag.name);
@@ -310,7 +315,9 @@ function buildScene(view, buf) {
       const d = drag;
       drag = null;
       controls.enabled = true;
-      if (d.moved) { undoStack.push(d.before); redoStack.length = 0; refresh(); }
+      if (d.moved) { undoStack.push(d.before); redoStack.length = 0; refresh(); return; }
+      const p = d.name === d.was ? surfaceAt(e.clientX, e.clientY) : null;
+      if (p) place(d.name, p); else select(d.name);
       return;
     }
     if (!down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > 4 || !selected) { down = null; return; }
