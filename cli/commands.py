@@ -173,11 +173,29 @@ def cmd_landmarks(args):
     t = time.perf_counter()
     out = args.output or (None if args.source and args.preview else
                           os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
-    _never_the_input([out, args.preview], [args.head, args.source])
+    from autobones.errors import AutobonesError
+
+    if args.source and args.assist:
+        raise AutobonesError("--from reads every landmark from a file and --assist proposes them from a few: "
+                             "give one of them")
+    _never_the_input([out, args.preview], [args.head, args.source, args.assist])
     watch = stopwatch()
     V, F = autobones.load_mesh(args.head)
     watch.lap("load")
-    if args.source:
+    if args.assist:
+        from autobones.landmarks.assist import assist_landmarks
+
+        given = validate_landmarks(read_landmarks(args.assist), V, F, min_count=1, source=args.assist)
+        with progress(args, "fitting the generic head"):
+            found = assist_landmarks(V, F, given, rig=args.rig)
+        lm, frame, confidence = found.points, found.frame, found.confidence
+        proposed = [n for n in lm if n not in given]
+        how = (f"from {args.assist} ({len(given)} given), {len(proposed)} proposed, mean confidence "
+               f"{sum(confidence[n] for n in proposed) / max(len(proposed), 1):.2f}")
+        if found.omitted:
+            how += "; omitted " + ", ".join(sorted(found.omitted))
+        watch.lap("assist")
+    elif args.source:
         frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
         lm = validate_landmarks(read_landmarks(args.source), V, F, frame=frame, min_count=1, source=args.source)
         watch.lap("check")

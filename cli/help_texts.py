@@ -54,6 +54,7 @@ examples:
   autobones landmarks scan.obj -o scan.landmarks.json --preview scan.png
   autobones landmarks goat.obj --from goat.pp --preview goat.png        convert a file and draw it
   autobones landmarks bust.stl --up +z --front -y -o bust.landmarks.json
+  autobones landmarks cow.obj --assist cow5.json -o cow.landmarks.json   the rest from 5 placed names
 
 How: the head is turned upright, rendered on the CPU from the front and four views around it
 (+-30 deg yaw, +-15 deg pitch), MediaPipe Face Mesh finds 468 points in each picture, they are
@@ -63,7 +64,11 @@ the midline profile. A name whose views disagree is dropped, not guessed; a pair
 disagree is flagged. 27 of the contract's names are found (the ones a face picture shows).
 
 Animals, most cartoons and back-of-head scans have no face the detector knows: the command
-says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp).
+says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp), or
+place five (the outer eye corners, the nose tip, the mouth corners) and let --assist propose the
+rest: the generic head is fitted to the mesh through them and its own landmarks read off it
+("confidence" then falls with the distance from the placed names and where the fit meets the
+surface poorly).
 Needs the optional detector: pip install 'autobones[landmarks]'.
 
 output: the contract's JSON ({"format": "autobones-landmarks/1", "landmarks": {name: [x, y, z]}}),

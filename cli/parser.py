@@ -168,6 +168,10 @@ def add_landmarks(sub):
                                           "in the current folder (none with --from and only --preview)")
     m.add_argument("--from", dest="source", metavar="FILE",
                    help="read the landmarks from FILE (contract .json, MeshLab .pp, iBUG-68) instead of detecting")
+    m.add_argument("--assist", metavar="PARTIAL",
+                   help="propose the other names from a few placed in PARTIAL (at least exocanthion_l/_r, "
+                        "pronasale, cheilion_l/_r): the generic head fitted to the mesh; any head, animals too")
+    m.add_argument("--rig", help="generic rig folder for --assist (default: the built-in one)")
     m.add_argument("--preview", metavar="PNG", help="also draw a front and a side picture with every landmark named")
     m.add_argument("--edit", action="store_true",
                    help="place, move and check them by hand in the browser (starting from --from, else from "

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from .landmark_names import BILATERAL, NAME_INDEX, NAMES
 
 # Global scales tried when landmarks miss the surface, and what each one means.
@@ -259,7 +259,8 @@ def _check_surface(P, names, V, F, head, source, max_off):
     order = np.argsort(-d)
     worst = ", ".join(f"{names[i]} {d[i]:.2g}" for i in order[:min(4, int(far.sum()))])
     more = f" and {int(far.sum()) - 4} more" if far.sum() > 4 else ""
-    msg = (f"{source}: {int(far.sum())} of {len(P)} landmarks lie far from the mesh surface "
+    msg = (f"{source}: {int(far.sum())} of {counted(len(P), 'landmark')} {'lies' if far.sum() == 1 else 'lie'} "
+           "far from the mesh surface "
            f"({worst}{more} head sizes; at most {max_off:g} allowed)")
     hint = unit_hint(P, far, V, F, head, max_off)
     if hint is not None:

@@ -1,0 +1,124 @@
+"""``python benchmarks/landmarks.py --assist``: assisted landmarks (issue #35 part 2) on every landmarked head.
+
+For each head with a landmark file (``../shared/data``: ICT, menpo3d, the zoo; the hand-placed files
+of ``tests/landmarks`` for Lee Perry-Smith, the goat and the robot) the five names
+:data:`autobones.landmarks.assist.REQUIRED` are taken from the file and given to
+:func:`autobones.landmarks.assist.assist_landmarks`; every other name of the file is scored:
+distance of the proposal from the file's point, % of the file's ex-ex. Heads whose file lacks one of
+the five cannot be assisted and are listed. Targets (issue #35): human heads, 90 % of the pooled
+names within 5 % of ex-ex; animals and cartoons, the median name within 5 %.
+
+Variants (``--variants``, default ``as-is``; the zoo benchmark's copies, ``zoo_checks.make_variant``):
+``rotN`` (a random rotation), ``x1000`` / ``x0.001``, ``dec5k`` (decimated to 5k vertices, heads above
+that), ``remesh`` (Loop once, decimated back). The five are the copy's (rotated, scaled, or snapped to
+the new surface); proposals are mapped back to the file's frame before scoring.
+"""
+from __future__ import annotations
+
+import sys
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import zoo  # noqa: E402
+import zoo_checks as zc  # noqa: E402
+
+from autobones.errors import AutobonesError  # noqa: E402
+from autobones.io.landmarks import read_landmarks  # noqa: E402
+from autobones.io.mesh import load_mesh  # noqa: E402
+from autobones.landmarks.assist import REQUIRED, assist_landmarks  # noqa: E402
+
+HUMAN = zoo.HUMAN | {"generic_neutral_mesh"}
+WITHIN = 5.0   # % of ex-ex
+
+
+def landmarked_heads():
+    """name -> (mesh path, landmark path) of every shared head with a landmark file, sorted."""
+    heads = {n: (m, lm) for n, (m, lm) in zoo.heads_in(zoo.DATA).items() if lm is not None}
+    heads["generic_neutral_mesh"] = (zoo.DATA / "ict/generic_neutral_mesh.obj",
+                                     zoo.DATA / "ict/generic_neutral_mesh.landmarks.json")
+    heads["LeePerrySmith"] = (zoo.DATA / "misc/LeePerrySmith.obj", zoo.TESTS_LM / "LeePerrySmith.landmarks.json")
+    return dict(sorted(heads.items(), key=lambda kv: (kv[0] not in HUMAN, kv[0].lower())))
+
+
+def score(name, V, F, truth, variant):
+    """(errors {name: % ex-ex}, confidences, seconds, omitted) of one head copy, or a string why not."""
+    var = zc.make_variant(variant, V, F, truth, zlib.crc32(name.encode()))
+    if var is None:
+        return "n/a"
+    given = {n: var.lm[n] for n in REQUIRED}
+    t0 = time.perf_counter()
+    try:
+        out = assist_landmarks(var.V, var.F, given)
+    except AutobonesError as exc:
+        return f"refused: {exc}"
+    secs = time.perf_counter() - t0
+    unit = np.linalg.norm(truth["exocanthion_l"] - truth["exocanthion_r"])
+    err = {n: 100 * float(np.linalg.norm(var.back(out.points[n]) - truth[n])) / unit
+           for n in truth if n not in REQUIRED and n in out.points}
+    return err, {n: out.confidence[n] for n in err}, secs, dict(out.omitted)
+
+
+def run(variants=("as-is",), heads=None):
+    """Print the per-head and pooled tables (markdown) for ``variants``."""
+    table = landmarked_heads()
+    if heads:
+        table = {h: table[h] for h in heads}
+    rows, lacking = [], {}
+    for h, (mesh, lmf) in table.items():
+        truth = read_landmarks(lmf)
+        missing = [n for n in REQUIRED if n not in truth]
+        if missing:
+            lacking[h] = missing
+            continue
+        V, F = load_mesh(mesh)
+        for v in variants:
+            r = score(h, V, F, truth, v)
+            if isinstance(r, str):
+                print(f"  {h} {v}: {r}", file=sys.stderr, flush=True)
+                continue
+            rows.append((h, v, len(V)) + r)
+            e = np.array(list(r[0].values()))
+            print(f"  {h:22s} {v:7s} mean {e.mean():5.1f}% within {np.mean(e <= WITHIN) * 100:3.0f}%  {r[2]:.2f} s",
+                  file=sys.stderr, flush=True)
+    print(f"\n## Assisted landmarks: {', '.join(REQUIRED)} given, the rest proposed "
+          f"(% of ex-ex; variants {', '.join(variants)})\n")
+    print("| head | group | variant | vertices | names | mean % | median % | within 5 % | worst (name) "
+          "| corr(confidence, error) | omitted | s |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---|---:|---|---:|")
+    for h, v, n, err, conf, secs, omitted in rows:
+        e = np.array(list(err.values()))
+        worst = max(err, key=err.get)
+        c = np.array([conf[k] for k in err])
+        corr = np.corrcoef(c, e)[0, 1] if len(e) > 2 and c.std() > 0 else float("nan")
+        print(f"| {h} | {'human' if h in HUMAN else 'other'} | {v} | {n:,} | {len(e)} | {e.mean():.1f} "
+              f"| {np.median(e):.1f} | {np.mean(e <= WITHIN) * 100:.0f} % | {err[worst]:.1f} ({worst}) "
+              f"| {corr:+.2f} | {', '.join(omitted) or '-'} | {secs:.2f} |")
+    print("\n| group | variant | heads | names | mean % | median % | within 5 % | target |")
+    print("|---|---|---:|---:|---:|---:|---:|---|")
+    for group in ("human", "other"):
+        for v in variants:
+            sel = [r for r in rows if r[1] == v and (r[0] in HUMAN) == (group == "human")]
+            e = np.array([x for r in sel for x in r[3].values()])
+            if not len(e):
+                continue
+            within = np.mean(e <= WITHIN) * 100
+            target = (f"90 % within 5 %: {'MET' if within >= 90 else 'NOT MET'}" if group == "human" else
+                      f"median within 5 %: {'MET' if np.median(e) <= WITHIN else 'NOT MET'}")
+            print(f"| {group} | {v} | {len(sel)} | {len(e)} | {e.mean():.1f} | {np.median(e):.1f} | {within:.0f} % "
+                  f"| {target} |")
+    if lacking:
+        print("\nNot assisted (the file lacks one of the five): "
+              + "; ".join(f"{h} ({', '.join(m)})" for h, m in lacking.items()))
+    names = sorted({k for r in rows for k in r[3]})
+    print("\n| name | human heads | human mean % | human max % | other heads | other mean % |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for k in names:
+        hum = [r[3][k] for r in rows if k in r[3] and r[0] in HUMAN]
+        oth = [r[3][k] for r in rows if k in r[3] and r[0] not in HUMAN]
+        print(f"| {k} | {len(hum)} | {np.mean(hum) if hum else float('nan'):.1f} | "
+              f"{max(hum) if hum else float('nan'):.1f} | {len(oth)} | {np.mean(oth) if oth else float('nan'):.1f} |")
+    return rows
