@@ -231,11 +231,14 @@ def _edit_landmarks(args):
     if args.preview:
         raise AutobonesError("--preview draws landmarks from a file; with --edit, save them first, then "
                              "autobones landmarks HEAD --from SAVED --preview PNG")
+    if args.source and args.assist:
+        raise AutobonesError("--from and --assist both name the landmarks to start from: give one of them")
     port = parse_port(args.port if args.port is not None else 0)  # refused before the mesh is read
     watch = stopwatch()
-    with progress(args, "reading the head" + ("" if args.source else " and finding landmarks")):
-        session = open_session(args.head, output=args.output, pp=args.pp, source=args.source, up=args.up,
-                               front=args.front)
+    with progress(args, "reading the head" + ("" if args.source or args.assist else " and finding landmarks")):
+        # --assist PARTIAL: its names placed, and the page proposes the rest from them at once
+        session = open_session(args.head, output=args.output, pp=args.pp, source=args.source or args.assist,
+                               up=args.up, front=args.front, rig=args.rig)
     watch.lap("load")
     server = make_editor_server(session, port)
     watch.lap("serve")

@@ -171,11 +171,7 @@ def test_start_from_a_file_or_detection_or_empty_with_a_note(tmp_path, marks, mo
     assert sess.start == {} and sess.note.startswith("no landmarks found automatically") and "\n" not in sess.note
     with pytest.raises(AutobonesError, match="needs cheilion_l, cheilion_r placed first"):
         sess.assist(_lists(marks))  # the robot's file has no mouth corners
-    fr = sess.frame
-    given = {n: marks[n] for n in ("exocanthion_l", "exocanthion_r", "pronasale")}
-    for side, n in ((1.0, "cheilion_l"), (-1.0, "cheilion_r")):
-        guess = marks["pronasale"] + fr.size * (-0.15 * fr.rotation[1] + side * 0.1 * fr.rotation[0])
-        given[n] = closest_on_surface(guess[None], sess.V, sess.F)[0]
+    given = _five(sess, marks)
     err = None
     try:
         got = sess.assist(_lists(given))
@@ -384,16 +380,37 @@ def test_browser_places_drags_undoes_flags_and_saves(browser, tmp_path):
         s.close()
 
 
-def test_browser_closed_without_saving_leaves_no_file(browser, tmp_path, marks):
+def _five(sess, marks):
+    """The five names the assisted proposal needs, on the robot: its eye corners and nose tip, and mouth
+    corners put on the surface below the nose (its file has none)."""
+    fr = sess.frame
+    given = {n: marks[n] for n in ("exocanthion_l", "exocanthion_r", "pronasale")}
+    for side, n in ((1.0, "cheilion_l"), (-1.0, "cheilion_r")):
+        guess = marks["pronasale"] + fr.size * (-0.15 * fr.rotation[1] + side * 0.1 * fr.rotation[0])
+        given[n] = closest_on_surface(guess[None], sess.V, sess.F)[0]
+    return given
+
+
+def test_browser_proposes_the_rest_and_closing_without_save_leaves_no_file(browser, tmp_path, marks):
     sess = open_session(str(data(ROBOT)), output=str(tmp_path / "robot.landmarks.json"), detect=False)
+    sess.start = _five(sess, marks)  # as --assist PARTIAL starts it
     s = Serving(sess)
     try:
         page, errors = _open(browser, s.server.url)
-        x, y = page.evaluate(f"{HOOK}.project({marks['pronasale'].tolist()})")
-        page.evaluate(f"{HOOK}.select('pronasale')")
+        _settle(page)
+        state = page.evaluate(f"{HOOK}.state()")
+        proposed = {n for n, m in state.items() if m["kind"] == "assist"}
+        assert len(proposed) >= 20 and all(0 <= state[n]["conf"] <= 1 for n in proposed), state
+        n = sorted(proposed)[0]
+        assert "proposed (confidence" in page.inner_text(f'.lm[data-name="{n}"] .state')
+        page.click(f'.lm[data-name="{n}"] button.accept')
+        _settle(page)
+        assert page.evaluate(f"{HOOK}.state()")[n]["kind"] == "placed"
+        x, y = page.evaluate(f"{HOOK}.project({marks['nasion'].tolist()})")
+        page.evaluate(f"{HOOK}.select('nasion')")
         page.mouse.click(x, y)
         _settle(page)
-        assert page.evaluate(f"{HOOK}.state()")["pronasale"]["kind"] == "placed"
+        assert page.evaluate(f"{HOOK}.state()")["nasion"]["kind"] == "placed"
         assert page.locator(".lm img").count() == 44 and not errors, errors
         page.close()
     finally:

@@ -64,6 +64,7 @@ class EditSession:
     start: dict = field(default_factory=dict)
     confidence: dict = field(default_factory=dict)
     note: str = None
+    rig: str = None
     saved: list = field(default_factory=list)
 
     def page_facts(self):
@@ -123,7 +124,8 @@ class EditSession:
             raise AutobonesError(assist_missing())
         from ..landmarks.assist import assist_landmarks
 
-        got = assist_landmarks(self.V, self.F, {n: lm[n] for n in ASSIST_NEEDS})
+        # every name placed is given: the fit follows all the user has placed, not only the five it needs
+        got = assist_landmarks(self.V, self.F, lm, rig=self.rig)
         points = {n: [float(c) for c in np.asarray(p, dtype=np.float64).reshape(3)]
                   for n, p in got.points.items() if n in NAMES and n not in lm}
         conf = {n: round(float(got.confidence.get(n, 0.0)), 3) for n in points}
@@ -194,13 +196,14 @@ def edit_outputs(head, output=None, pp=None, source=None):
     return output, pp
 
 
-def open_session(head, output=None, pp=None, source=None, up=None, front=None, detect=True):
+def open_session(head, output=None, pp=None, source=None, up=None, front=None, detect=True, rig=None):
     """An :class:`EditSession` for the mesh file ``head``; AutobonesError (nothing written) for a
     missing or unreadable mesh or ``--from`` file, or an output that would replace an input.
 
     Starts from ``source`` (contract JSON, ``.pp``, iBUG-68; names and values checked, their places on
     the page) when given, else from automatic detection when ``detect`` (human faces; no face found:
-    empty, with a note saying why), else empty.
+    empty, with a note saying why), else empty. ``rig``: the generic rig folder the assisted proposals
+    fit (None: the built-in one).
     """
     import autobones
     from ..io.landmarks import read_landmarks
@@ -222,5 +225,5 @@ def open_session(head, output=None, pp=None, source=None, up=None, front=None, d
         except AutobonesError as exc:
             note = f"no landmarks found automatically ({str(exc).split(';')[0]}); place them by hand"
     return EditSession(head=head, V=V, F=F, frame=frame, output=output, pp_output=pp, start=start,
-                       confidence=confidence, note=note)
+                       confidence=confidence, note=note, rig=rig)
 

@@ -83,6 +83,7 @@ async function main() {
     if (k === 'z' && !e.shiftKey) { e.preventDefault(); undo(); }
     else if ((k === 'z' && e.shiftKey) || k === 'y') { e.preventDefault(); redo(); }
   });
+  if (assistReady()) await proposeRest();  // started from the five (--assist PARTIAL, --from): offered once at once
   hook.ready = true;
 }
 
@@ -127,7 +128,7 @@ async function proposeRest() {
     for (const [n, p] of Object.entries(out.points)) {
       if (!marks.has(n) || marks.get(n).kind !== 'placed') { marks.set(n, { p, kind: 'assist', conf: out.confidence[n] ?? null }); added++; }
     }
-    $('#note').textContent = `${added} names proposed from the ${facts.assist_needs.length} placed: hollow until accepted or moved`;
+    if (added) $('#note').textContent = `${added} names proposed from those placed: hollow until accepted or moved`;
     refresh();
   } catch (err) { $('#note').textContent = `no proposals: ${err.message}`; }
 }
