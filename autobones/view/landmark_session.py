@@ -81,7 +81,7 @@ class EditSession:
             "vertices": len(self.V), "triangles": len(self.F),
             # the page draws V - center (float32 keeps its precision near the head) and adds center back
             "center": [float(c) for c in (lo + hi) / 2], "size": float((hi - lo).max()),
-            "up": [float(c) for c in self.frame.rotation[1]], "front": [float(c) for c in self.frame.rotation[2]],
+            **display_axes(self.V, self.F, self.frame, self.start),
             "min_count": MIN_LANDMARKS, "assist_needs": list(ASSIST_NEEDS), "assist_error": assist_missing(),
         }
 
@@ -149,6 +149,21 @@ class EditSession:
             write_picked_points(self.pp_output, lm, mesh_name=mesh)
         self.saved = outs
         return outs
+
+
+def display_axes(V, F, frame, landmarks):
+    """``{"up", "front"}`` the page's camera starts from: the mesh's own axes nearest the head's up and
+    front (what the modeller chose, as ``autobones view`` shows a rig), the head's from its landmarks when
+    they tell it (an animal's detected frame can sit 45 degrees off), else from ``frame``; the exact
+    directions when both round to one axis."""
+    from ..orient import nearest_axis, parse_axis
+
+    fr = (frame_from_landmarks(V, F, landmarks) if landmarks else None) or frame
+    up, front = fr.rotation[1], fr.rotation[2]
+    au, af = parse_axis(nearest_axis(up)), parse_axis(nearest_axis(front))
+    if abs(float(np.dot(au, af))) < 0.5:
+        up, front = au, af
+    return {"up": [float(c) for c in up], "front": [float(c) for c in front]}
 
 
 def assist_missing():

@@ -185,6 +185,7 @@ function buildList(side) {
 function select(name) {
   selected = name;
   for (const [n, r] of rows) r.row.classList.toggle('selected', n === name);
+  if (rows.has(name)) rows.get(name).row.scrollIntoView({ block: 'nearest' });
   if (scene3d) scene3d.update();
 }
 
@@ -227,7 +228,9 @@ function buildScene(view, buf) {
   const up = new THREE.Vector3(...facts.up), front = new THREE.Vector3(...facts.front);
   const camera = new THREE.PerspectiveCamera(30, 1, size * 0.01, size * 100);
   camera.up.copy(up);
-  camera.position.copy(front).multiplyScalar(size * 2.6);
+  // three quarters from the subject's left, a little from above: the face and one ear at once
+  const side = new THREE.Vector3().crossVectors(up, front);
+  camera.position.copy(front).multiplyScalar(size * 2.4).addScaledVector(side, size * 0.9).addScaledVector(up, size * 0.3);
   const light = new THREE.DirectionalLight(0xffffff, 1.3);
   light.position.set(0.3, 0.6, 1);
   camera.add(light);
@@ -251,15 +254,21 @@ function buildScene(view, buf) {
   // markers: a filled ball per placed name, a hollow (wire) one per proposal, the selected one larger
   const group = new THREE.Group();
   scene.add(group);
+  // a proposal is a ring (hollow) turned to the camera and lifted off the surface toward it, so the
+  // surface hides it only from behind
   const ball = new THREE.SphereGeometry(size * 0.009, 14, 10);
+  const ring = new THREE.RingGeometry(size * 0.008, size * 0.013, 24);
   const mats = {};
-  const material = (side, hollow) => mats[side + hollow] ||= new THREE.MeshBasicMaterial({ color: COLOURS[side], wireframe: hollow });
+  const material = (side, hollow) => mats[side + hollow] ||= new THREE.MeshBasicMaterial(
+    { color: COLOURS[side], side: THREE.DoubleSide });
   const sideOf = (n) => /_l$/.test(n) ? 'l' : /_r$/.test(n) ? 'r' : 'mid';
   function update() {
     group.clear();
     for (const [n, m] of marks) {
-      const s = new THREE.Mesh(ball, material(sideOf(n), m.kind !== 'placed'));
+      const hollow = m.kind !== 'placed';
+      const s = new THREE.Mesh(hollow ? ring : ball, material(sideOf(n), hollow));
       s.position.set(m.p[0] - c[0], m.p[1] - c[1], m.p[2] - c[2]);
+      s.userData.at = s.position.clone();
       s.name = n;
       if (n === selected) s.scale.setScalar(1.6);
       group.add(s);
@@ -331,6 +340,11 @@ function buildScene(view, buf) {
   renderer.setAnimationLoop(() => {
     if (!dirty) return;
     dirty = false;
+    for (const o of group.children) {  // lifted toward the camera: a ball half sunk in the skin reads poorly
+      const hollow = o.geometry === ring;
+      if (hollow) o.quaternion.copy(camera.quaternion);
+      o.position.copy(camera.position).sub(o.userData.at).setLength(size * (hollow ? 0.015 : 0.006)).add(o.userData.at);
+    }
     renderer.render(scene, camera);
     frames++;
   });
