@@ -70,8 +70,10 @@ def shoot(out_png):
                 page.mouse.wheel(0, -100)
             page.evaluate(f"{hook}.select('{SELECTED}')")
             page.wait_for_timeout(600)  # the name pictures and the last frame
-            page.wait_for_function("[...document.querySelectorAll('.lm img')].slice(0, 8)"
-                                   ".every((i) => i.complete && i.naturalWidth > 0)", timeout=60000)
+            page.wait_for_function("[...document.querySelectorAll('.lm img')].every((i) => "  # those in sight
+                                   "i.getBoundingClientRect().top > innerHeight || (i.complete && i.naturalWidth > 0))",
+                                   timeout=60000)
+            page.wait_for_timeout(300)
             png = page.screenshot()
             browser.close()
     finally:

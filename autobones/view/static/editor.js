@@ -209,16 +209,40 @@ function updateList() {
 // ---------------------------------------------------------------- the 3-D view
 
 function buildScene(view, buf) {
+  const v = makeView(view, buf);
+  const markers = makeMarkers(v);
+  const pick = makePicking(v, markers.group);
+  listenPointer(v, pick, markers);
+  let frames = 0;
+  v.renderer.setAnimationLoop(() => {
+    if (!v.dirty) return;
+    v.dirty = false;
+    markers.face(v.camera);
+    v.renderer.render(v.scene, v.camera);
+    frames++;
+  });
+  Object.assign(hook, {
+    frames: () => frames,
+    project(p) {  // a mesh-frame point -> client pixel [x, y] with the page's camera
+      v.camera.updateMatrixWorld();
+      const q = new THREE.Vector3(p[0] - v.c[0], p[1] - v.c[1], p[2] - v.c[2]).project(v.camera);
+      const r = v.canvas.getBoundingClientRect();
+      return [r.left + (q.x + 1) / 2 * r.width, r.top + (1 - q.y) / 2 * r.height];
+    },
+    surfaceAt: pick.surfaceAt,
+  });
+  return { update: markers.update, redraw: v.redraw };
+}
+
+// the mesh (drawn shifted by facts.center), renderer, lights, camera and orbit controls
+function makeView(view, buf) {
   const nv = facts.vertices, nf = facts.triangles;
-  const positions = new Float32Array(buf, 0, 3 * nv);
-  const index = new Uint32Array(buf, 12 * nv, 3 * nf);
   const c = facts.center, size = facts.size || 1;
   const geom = new THREE.BufferGeometry();
-  geom.setAttribute('position', new THREE.BufferAttribute(positions, 3));
-  geom.setIndex(new THREE.BufferAttribute(index, 1));
+  geom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(buf, 0, 3 * nv), 3));
+  geom.setIndex(new THREE.BufferAttribute(new Uint32Array(buf, 12 * nv, 3 * nf), 1));
   geom.computeVertexNormals();
   const mesh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({ color: 0xd8d2cc, roughness: 0.8, side: THREE.DoubleSide }));
-
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   view.prepend(renderer.domElement);
@@ -238,74 +262,85 @@ function buildScene(view, buf) {
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.set(0, 0, 0);
   controls.update();
-  let dirty = true;
-  const redraw = () => { dirty = true; };
-  controls.addEventListener('change', redraw);
-  function resize() {
+  const v = { mesh, renderer, scene, camera, controls, c, size, canvas: renderer.domElement, dirty: true };
+  v.redraw = () => { v.dirty = true; };
+  controls.addEventListener('change', v.redraw);
+  new ResizeObserver(() => {
     const w = view.clientWidth || 1, h = view.clientHeight || 1;
     renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
-    redraw();
-  }
-  new ResizeObserver(resize).observe(view);
-  resize();
+    v.redraw();
+  }).observe(view);
+  return v;
+}
 
-  // markers: a filled ball per placed name, a hollow (wire) one per proposal, the selected one larger
+// markers: a filled ball per placed name, a ring (hollow) per proposal, the selected one larger. A ring
+// is turned to the camera, and every marker lifted off the skin toward it (a ball half sunk in the skin
+// reads poorly), so the surface hides a marker only from behind
+function makeMarkers(v) {
   const group = new THREE.Group();
-  scene.add(group);
-  // a proposal is a ring (hollow) turned to the camera and lifted off the surface toward it, so the
-  // surface hides it only from behind
-  const ball = new THREE.SphereGeometry(size * 0.009, 14, 10);
-  const ring = new THREE.RingGeometry(size * 0.008, size * 0.013, 24);
+  v.scene.add(group);
+  const ball = new THREE.SphereGeometry(v.size * 0.009, 14, 10);
+  const ring = new THREE.RingGeometry(v.size * 0.008, v.size * 0.013, 24);
   const mats = {};
-  const material = (side, hollow) => mats[side + hollow] ||= new THREE.MeshBasicMaterial(
-    { color: COLOURS[side], side: THREE.DoubleSide });
+  const material = (side) => mats[side] ||= new THREE.MeshBasicMaterial({ color: COLOURS[side], side: THREE.DoubleSide });
   const sideOf = (n) => /_l$/.test(n) ? 'l' : /_r$/.test(n) ? 'r' : 'mid';
   function update() {
     group.clear();
     for (const [n, m] of marks) {
-      const hollow = m.kind !== 'placed';
-      const s = new THREE.Mesh(hollow ? ring : ball, material(sideOf(n), hollow));
-      s.position.set(m.p[0] - c[0], m.p[1] - c[1], m.p[2] - c[2]);
+      const s = new THREE.Mesh(m.kind === 'placed' ? ball : ring, material(sideOf(n)));
+      s.position.set(m.p[0] - v.c[0], m.p[1] - v.c[1], m.p[2] - v.c[2]);
       s.userData.at = s.position.clone();
       s.name = n;
       if (n === selected) s.scale.setScalar(1.6);
       group.add(s);
     }
-    redraw();
+    v.redraw();
   }
+  function face(camera) {
+    for (const o of group.children) {
+      const hollow = o.geometry === ring;
+      if (hollow) o.quaternion.copy(camera.quaternion);
+      o.position.copy(camera.position).sub(o.userData.at).setLength(v.size * (hollow ? 0.015 : 0.006)).add(o.userData.at);
+    }
+  }
+  return { group, update, face };
+}
 
+function makePicking(v, group) {
   const ray = new THREE.Raycaster();
   const ndc = new THREE.Vector2();
-  function aim(x, y) {  // client pixel -> the ray through it
-    const r = renderer.domElement.getBoundingClientRect();
+  function aim(x, y) {  // client pixel -> the ray through it; false off the canvas
+    const r = v.canvas.getBoundingClientRect();
+    if (x < r.left || x >= r.right || y < r.top || y >= r.bottom) return false;
     ndc.set(((x - r.left) / r.width) * 2 - 1, -((y - r.top) / r.height) * 2 + 1);
-    ray.setFromCamera(ndc, camera);
+    ray.setFromCamera(ndc, v.camera);
+    return true;
   }
-  function surfaceAt(x, y) {  // the mesh point under a client pixel, mesh frame, or null (off the canvas too)
-    const r = renderer.domElement.getBoundingClientRect();
-    if (x < r.left || x >= r.right || y < r.top || y >= r.bottom) return null;
-    aim(x, y);
-    const hit = ray.intersectObject(mesh, false)[0];
-    return hit ? [hit.point.x + c[0], hit.point.y + c[1], hit.point.z + c[2]] : null;
-  }
-  function markerAt(x, y) {
-    aim(x, y);
-    const hit = ray.intersectObjects(group.children, false)[0];
-    return hit ? hit.object.name : null;
-  }
+  return {
+    surfaceAt(x, y) {  // the mesh point under a client pixel, mesh frame, or null
+      const hit = aim(x, y) && ray.intersectObject(v.mesh, false)[0];
+      return hit ? [hit.point.x + v.c[0], hit.point.y + v.c[1], hit.point.z + v.c[2]] : null;
+    },
+    markerAt(x, y) {
+      const hit = aim(x, y) && ray.intersectObjects(group.children, false)[0];
+      return hit ? hit.object.name : null;
+    },
+  };
+}
 
-  // pointer: on a marker, drag it along the surface (orbit off meanwhile); a click on a marker without
-  // movement selects its name, or places the selected name there when it is that marker's (accepting a
-  // proposal where it is clicked); elsewhere, a click places the selected name, a drag turns the view
+// pointer: on a marker, drag it along the surface (orbit off meanwhile); a click on a marker without
+// movement selects its name, or places the selected name there when it is that marker's (accepting a
+// proposal where it is clicked); elsewhere, a click places the selected name, a drag turns the view
+function listenPointer(v, pick, markers) {
   let drag = null, down = null;
-  const canvas = renderer.domElement;
+  const canvas = v.canvas;
   canvas.addEventListener('pointerdown', (e) => {  // capture: runs before the orbit controls see the event
     if (e.button !== 0) return;
-    const name = markerAt(e.clientX, e.clientY);
+    const name = pick.markerAt(e.clientX, e.clientY);
     if (name) {
-      controls.enabled = false;
+      v.controls.enabled = false;
       drag = { name, before: snapshot(), moved: false, x: e.clientX, y: e.clientY, was: selected };
       canvas.setPointerCapture(e.pointerId);
     } else down = { x: e.clientX, y: e.clientY };
@@ -313,53 +348,28 @@ function buildScene(view, buf) {
   canvas.addEventListener('pointermove', (e) => {
     if (!drag || (!drag.moved && Math.hypot(e.clientX - drag.x, e.clientY - drag.y) <= 3)) return;
     if (!drag.moved) select(drag.name);
-    const p = surfaceAt(e.clientX, e.clientY);
+    const p = pick.surfaceAt(e.clientX, e.clientY);
     if (!p) return;
     const m = marks.get(drag.name);
     m.p = p; m.kind = 'placed'; m.conf = null;
     drag.moved = true;
-    update();
+    markers.update();
   });
   canvas.addEventListener('pointerup', (e) => {
     if (drag) {
       const d = drag;
       drag = null;
-      controls.enabled = true;
+      v.controls.enabled = true;
       if (d.moved) { undoStack.push(d.before); redoStack.length = 0; refresh(); return; }
-      const p = d.name === d.was ? surfaceAt(e.clientX, e.clientY) : null;
+      const p = d.name === d.was ? pick.surfaceAt(e.clientX, e.clientY) : null;
       if (p) place(d.name, p); else select(d.name);
       return;
     }
-    if (!down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > 4 || !selected) { down = null; return; }
+    const click = down && Math.hypot(e.clientX - down.x, e.clientY - down.y) <= 4;
     down = null;
-    const p = surfaceAt(e.clientX, e.clientY);
+    const p = click && selected ? pick.surfaceAt(e.clientX, e.clientY) : null;
     if (p) place(selected, p);
   });
-
-  let frames = 0;
-  renderer.setAnimationLoop(() => {
-    if (!dirty) return;
-    dirty = false;
-    for (const o of group.children) {  // lifted toward the camera: a ball half sunk in the skin reads poorly
-      const hollow = o.geometry === ring;
-      if (hollow) o.quaternion.copy(camera.quaternion);
-      o.position.copy(camera.position).sub(o.userData.at).setLength(size * (hollow ? 0.015 : 0.006)).add(o.userData.at);
-    }
-    renderer.render(scene, camera);
-    frames++;
-  });
-
-  Object.assign(hook, {
-    frames: () => frames,
-    project(p) {  // a mesh-frame point -> client pixel [x, y] with the page's camera
-      camera.updateMatrixWorld();
-      const v = new THREE.Vector3(p[0] - c[0], p[1] - c[1], p[2] - c[2]).project(camera);
-      const r = canvas.getBoundingClientRect();
-      return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
-    },
-    surfaceAt,
-  });
-  return { update, redraw };
 }
 
 function place(name, p) {
