@@ -126,6 +126,26 @@ def test_mirror_proposal_crosses_the_symmetry_plane_onto_the_surface(session, ma
         s.close()
 
 
+def test_a_turned_and_scaled_glb_gets_the_same_proposals_in_its_own_frame(session, marks, tmp_path):
+    """The mesh's own frame and units in and out: the robot turned 70 degrees and in millimetres, as a glb
+    (load_mesh reads it as every other format), mirrors and checks its turned landmarks as the original."""
+    import trimesh
+
+    a = np.radians(70)
+    R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    move = lambda P: 1000.0 * np.asarray(P) @ R.T + np.array([5.0, -20.0, 300.0])
+    glb = tmp_path / "turned.glb"
+    trimesh.Trimesh(move(session.V), session.F, process=False).export(glb)
+    turned = open_session(str(glb), output=str(tmp_path / "t.json"), detect=False)
+    ex = float(np.linalg.norm(marks["exocanthion_l"] - marks["exocanthion_r"]))
+    for name in ("exocanthion_l", "zygion_r"):
+        partner, p = session.mirror(name, marks[name])
+        partner2, q = turned.mirror(name, move(marks[name]))
+        assert partner2 == partner and np.linalg.norm(q - move(p)) < 0.02 * 1000 * ex, name
+    assert turned.problems(_lists({n: move(p) for n, p in marks.items()}))["names"] == {}
+    assert not os.path.exists(tmp_path / "t.json")
+
+
 def test_save_writes_json_and_pp_atomically_and_done_stops(tmp_path, marks, monkeypatch):
     head = str(data(ROBOT))
     sess = open_session(head, output=str(tmp_path / "r.pp"), detect=False)

@@ -195,16 +195,16 @@ def edit_outputs(head, output=None, pp=None, source=None):
     An output is never the mesh; it is the ``--from`` file only when named with ``-o`` outright
     (editing a landmark file in place), never by default.
     """
+    explicit = output is not None and not output.lower().endswith(".pp")  # the JSON named outright
     if output and output.lower().endswith(".pp"):
         pp = pp or output
         output = os.path.join(os.path.dirname(output), os.path.basename(output)[:-3] + ".landmarks.json")
-    explicit = output is not None
     output = output or os.path.splitext(os.path.basename(head))[0] + ".landmarks.json"
     if pp is not None and not pp.lower().endswith(".pp"):
         raise AutobonesError(f"--pp {pp}: MeshLab picked points are written as .pp")
     refuse_overwriting_inputs([output, pp], [head])
-    if not explicit:
-        refuse_overwriting_inputs([output], [source])  # the default name must not replace the file read
+    if not explicit:  # a name the user did not write (the default, or beside -o X.pp) never replaces the file read
+        refuse_overwriting_inputs([output], [source])
     for p in (output, pp):
         if p:
             check_destination(p, "the landmark file")
