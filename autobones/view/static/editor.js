@@ -47,14 +47,16 @@ function setStatus(text) { $('#status').textContent = text; }
 let marks = new Map();
 const undoStack = [], redoStack = [];
 const snapshot = () => JSON.stringify([...marks]);
+let unsaved = false;  // the page asks before it is closed with edits not saved
 function change(fn) {  // every edit: one undo step
+  unsaved = true;
   undoStack.push(snapshot());
   redoStack.length = 0;
   fn();
   refresh();
 }
-function undo() { if (undoStack.length) { redoStack.push(snapshot()); marks = new Map(JSON.parse(undoStack.pop())); refresh(); } }
-function redo() { if (redoStack.length) { undoStack.push(snapshot()); marks = new Map(JSON.parse(redoStack.pop())); refresh(); } }
+function undo() { if (undoStack.length) { unsaved = true; redoStack.push(snapshot()); marks = new Map(JSON.parse(undoStack.pop())); refresh(); } }
+function redo() { if (redoStack.length) { unsaved = true; undoStack.push(snapshot()); marks = new Map(JSON.parse(redoStack.pop())); refresh(); } }
 const accepted = () => Object.fromEntries([...marks].filter(([, m]) => m.kind === 'placed').map(([n, m]) => [n, m.p]));
 
 let facts = null, names = [], selected = null, problems = { names: {}, set: [] }, assistOffered = false;
@@ -77,6 +79,7 @@ async function main() {
   refresh = () => { scene3d.update(); updateList(); check(); };
   select(names.find((n) => !marks.has(n)) || names[0]);
   refresh();
+  window.addEventListener('beforeunload', (e) => { if (unsaved && !hook.done) { e.preventDefault(); e.returnValue = ''; } });
   document.addEventListener('keydown', (e) => {
     if (!(e.ctrlKey || e.metaKey)) return;
     const k = e.key.toLowerCase();
@@ -138,6 +141,7 @@ async function save() {
     const out = await call('api/save', { landmarks: accepted() });
     $('#saved').textContent = `saved ${out.written.join(' and ')} (${Object.keys(accepted()).length} landmarks)`;
     hook.saved = out.written;
+    unsaved = false;
   } catch (err) { showError(err); }
 }
 
@@ -360,7 +364,7 @@ function listenPointer(v, pick, markers) {
       const d = drag;
       drag = null;
       v.controls.enabled = true;
-      if (d.moved) { undoStack.push(d.before); redoStack.length = 0; refresh(); return; }
+      if (d.moved) { unsaved = true; undoStack.push(d.before); redoStack.length = 0; refresh(); return; }
       const p = d.name === d.was ? pick.surfaceAt(e.clientX, e.clientY) : null;
       if (p) place(d.name, p); else select(d.name);
       return;
