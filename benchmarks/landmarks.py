@@ -364,12 +364,15 @@ def main(argv=None):
     ap.add_argument("--variants", default="as-is", help="with --assist: comma-separated copies (as-is, rot1..rot6, "
                                                         "x1000, x0.001, dec5k, remesh)")
     ap.add_argument("--heads", help="with --assist: comma-separated head names (default: all)")
+    ap.add_argument("--reading", default="held-out", choices=("held-out", "shipped", "own"),
+                    help="with --assist: where names are read off the generic (see landmarks_assist.py)")
     args = ap.parse_args(argv)
     if args.assist:
         import landmarks_assist
 
         t0 = time.perf_counter()
-        landmarks_assist.run(tuple(args.variants.split(",")), args.heads.split(",") if args.heads else None)
+        landmarks_assist.run(tuple(args.variants.split(",")), args.heads.split(",") if args.heads else None,
+                             args.reading)
         print(f"\ntotal wall time {time.perf_counter() - t0:.0f} s")
         return 0
     if args.time_worker:
