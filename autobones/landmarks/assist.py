@@ -51,10 +51,6 @@ RESIDUAL_SCALE = 0.1
 #: Largest :func:`face_distance` of a human-proportioned face (between the humans' 0.044 and 0.072).
 HUMAN_FACE = 0.06
 
-#: A name whose fitted point lies further than this (ex-ex) off the head, with the fitted
-#: skin's normal opposite the head's, is omitted: the head has no such part there.
-MISSING_RESIDUAL = 1.0
-
 
 @dataclass(frozen=True)
 class Assisted:
@@ -67,7 +63,8 @@ class Assisted:
     confidence : dict str -> float
         In [0, 1], per name of ``points`` (1 for a given name); see :func:`confidence`.
     omitted : dict str -> str
-        Names of the generic rig not proposed, with the reason (the head lacks the part).
+        Contract names neither given nor proposed, with the reason (the generic rig, or the ``reading``,
+        carries no such landmark). A part the head lacks is proposed at a confidence near 0.
     frame : Frame or None
         The head's frame from the landmarks (:func:`autobones.orient.frame_from_landmarks`).
     unit : float
@@ -251,16 +248,16 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None):
 
         reading = {**generic.landmarks, **(built_in_reading() if rig is None else {})}
     wanted = [n for n in NAMES if n in reading and n not in given]
-    points, conf, omitted = dict(given), {n: 1.0 for n in given}, {}
+    # a part the head lacks (ears on a cartoon) is still proposed, at a confidence near 0 (the fitted skin
+    # hangs off the head there): no threshold told such parts from a real one the fit missed on the zoo
+    # (a camel's back of the head lay 1.06 ex-ex off); a name the generic carries nowhere is omitted
+    omitted = {n: "the generic rig has no such landmark to read off" for n in NAMES
+               if n not in reading and n not in given}
+    points, conf = dict(given), {n: 1.0 for n in given}
     if wanted:
-        found, c, far = _read_names(fit, V, F, [reading[n] for n in wanted], given, unit)
-        for i, n in enumerate(wanted):
-            if far[i] is not None:
-                omitted[n] = (f"the fitted generic {n} lies {far[i]:.2f} ex-ex off the head, facing opposite "
-                              "its surface: the head has no such part there")
-                continue
-            points[n] = found[i]
-            conf[n] = float(c[i])
+        found, c = _read_names(fit, V, F, [reading[n] for n in wanted], given, unit)
+        points.update(zip(wanted, found))
+        conf.update(zip(wanted, map(float, c)))
     human = face_distance(given, generic.landmarks) <= HUMAN_FACE
     if human and "menton" in points and "menton" not in given:
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
@@ -293,7 +290,7 @@ def face_distance(given, reference):
 
 def _read_names(fit, V, F, where, given, unit):
     """Points ``where`` (k, 3) of the generic skin read off the fit and snapped to the head: (found (k, 3),
-    confidence (k,), far (k,) list: the residual of a name the head lacks, else None)."""
+    confidence (k,))."""
     Q, gface = read_off(np.asarray(where, dtype=np.float64), fit.Vg, fit.Fg, fit.P)
     snapped, tface, tbary, _ = closest_points(Q, V, F)
     # how the fit met the head around each name: the fitted (unstuck) skin's distance to its stuck
@@ -306,8 +303,7 @@ def _read_names(fit, V, F, where, given, unit):
     agreement = np.where(fit.reliable[corners].all(axis=1), agreement, 0.5 * agreement)
     G = np.array(list(given.values()))
     distance = np.sqrt(((snapped[:, None, :] - G[None]) ** 2).sum(-1)).min(axis=1) / unit
-    far = [r if r > MISSING_RESIDUAL and a < 0.0 else None for r, a in zip(residual, agreement)]
-    return snapped, confidence(distance, residual, agreement), far
+    return snapped, confidence(distance, residual, agreement)
 
 
 def _unit_rows(A):
