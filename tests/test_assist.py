@@ -34,13 +34,40 @@ def _errors(points, truth):
 
 
 def test_proposals_on_an_ict_identity_are_within_the_measured_bound(identity000):
-    # measured 2026-12-04: mean 9.6 %, worst 18.2 % (palpebrale_superius_l) of ex-ex over the 22 published
-    # names that were not given (benchmarks/landmarks.py --assist); bounds with margin
+    # measured 2026-12-04 with the built-in calibrated reading: mean 4.73 %, worst 10.8 %
+    # (palpebrale_superius_r) of ex-ex over the 22 published names not given. In-sample: identity000 is
+    # one of the nine heads the calibration was made from (benchmarks/landmarks.py --assist --reading
+    # held-out measures heads it never saw); bounds with margin
     V, F, truth, out = identity000
     err = _errors(out.points, truth)
     assert len(err) == 22
-    assert np.mean(list(err.values())) < 11.0, err
-    assert max(err.values()) < 22.0, err
+    assert np.mean(list(err.values())) < 5.5, err
+    assert max(err.values()) < 13.0, err
+    assert err["menton"] < 1.0, err     # the human chin's profile rule (measured 0.06 %)
+
+
+def test_the_generic_rigs_own_landmarks_read_off_are_within_the_measured_bound():
+    # no calibration (reading = the generic's own landmarks): measured mean 8.9 %, worst 18.2 %
+    from autobones.landmarks.assist import generic_skin
+
+    V, F, truth = _head("ict/identity000")
+    out = assist_landmarks(V, F, {n: truth[n] for n in REQUIRED}, reading=dict(generic_skin()[0].landmarks))
+    err = _errors(out.points, truth)
+    assert np.mean(list(err.values())) < 10.5, err
+    assert max(err.values()) < 21.0, err
+
+
+def test_a_human_face_is_told_from_an_animal_by_its_five_names():
+    from autobones.landmarks.assist import HUMAN_FACE, face_distance, generic_skin
+
+    generic = generic_skin()[0].landmarks
+    assert face_distance(generic, generic) == pytest.approx(0.0, abs=1e-12)
+    human = face_distance(_head("ict/identity000")[2], generic)            # measured 0.026
+    cow = face_distance(read_landmarks(ROOT / "tests" / "landmarks" / "cowHead.landmarks.json"), generic)  # 0.169
+    assert human < HUMAN_FACE < cow
+    R = Rotation.from_euler("xyz", [10, 80, -35], degrees=True).as_matrix()
+    turned = {n: 7.0 * R @ p + 3.0 for n, p in generic.items()}
+    assert face_distance(turned, generic) == pytest.approx(0.0, abs=1e-9)
 
 
 def test_every_contract_name_is_returned_given_ones_unchanged(identity000):
@@ -66,22 +93,36 @@ def test_the_same_input_gives_the_same_output_bit_for_bit(identity000):
 
 
 def test_a_rotated_millimetre_copy_maps_back(identity000):
-    # measured: 1.2e-13 % of ex-ex (the fit is equivariant); bound 0.01 %
+    # measured: 1.2e-13 % of ex-ex (the fit is equivariant), menton 0.015 % (the profile's point picked
+    # among the plane cut's segment ends, computed in the copy's coordinates); bound 0.05 %
     V, F, truth, out = identity000
     R = Rotation.from_euler("xyz", [30, -70, 110], degrees=True).as_matrix()
     turned = assist_landmarks(1000 * V @ R.T, F, {n: 1000 * R @ truth[n] for n in REQUIRED})
     assert set(turned.points) == set(out.points)
     for n in out.points:
-        assert np.linalg.norm(turned.points[n] @ R / 1000 - out.points[n]) < 1e-4 * out.unit, n
+        assert np.linalg.norm(turned.points[n] @ R / 1000 - out.points[n]) < 5e-4 * out.unit, n
         assert turned.confidence[n] == pytest.approx(out.confidence[n], abs=1e-9)
+
+
+def test_a_name_the_reading_lacks_is_omitted_with_the_reason():
+    from autobones.landmarks.assist import generic_skin
+
+    V, F, truth = _head("menpo3d/james")
+    own = dict(generic_skin()[0].landmarks)
+    reading = {n: p for n, p in own.items() if not n.startswith(("tragion", "superaurale", "subaurale"))}
+    out = assist_landmarks(V, F, {n: truth[n] for n in REQUIRED}, reading=reading)
+    assert sorted(out.omitted) == sorted(n for n in own if n not in reading)
+    assert all("no such landmark" in why for why in out.omitted.values())
+    assert set(out.points) == set(reading) | set(REQUIRED)
 
 
 def test_an_animal_gets_proposals_too():
     V, F = load_mesh(data("zoo/cowHead.obj"))
     truth = read_landmarks(ROOT / "tests" / "landmarks" / "cowHead.landmarks.json")
     out = assist_landmarks(V, F, {n: truth[n] for n in REQUIRED})
-    assert len(out.points) + len(out.omitted) == len(NAMES)
-    assert len(out.points) >= 30
+    assert set(out.points) == set(NAMES) and not out.omitted
+    # its ears and skull are far from a human's: the proposals there are offered at a low confidence
+    assert min(out.confidence.values()) < 0.2
     assert all(np.isfinite(p).all() for p in out.points.values())
 
 
@@ -150,3 +191,56 @@ def test_cli_assist_bad_input_is_one_line_exit_2_nothing_written(tmp_path, extra
     assert r.returncode == 2
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not (tmp_path / "out.json").exists()
+
+
+def test_pull_back_inverts_read_off():
+    from autobones.landmarks.assist_calibration import pull_back
+
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    F = np.array([[0, 1, 2], [1, 3, 2]])
+    P = 2.0 * V + [0.0, 0.0, 5.0]
+    rest = np.array([[0.25, 0.25, 0.0], [0.75, 0.6, 0.0]])
+    Q, _ = read_off(rest, V, F, P)
+    np.testing.assert_allclose(pull_back(Q, V, F, P), rest, atol=1e-12)
+
+
+def test_calibrate_weighs_every_family_the_same():
+    from autobones.landmarks.assist_calibration import calibrate
+
+    V = np.array([[0.0, 0, 0], [4, 0, 0], [0, 4, 0]])
+    F = np.array([[0, 1, 2]])
+    samples = [("a", {"nasion": [1.0, 1, 0]}), ("a", {"nasion": [1.0, 1, 0]}), ("a", {"nasion": [1.0, 1, 0]}),
+               ("b", {"nasion": [2.0, 1, 0], "menton": [0.5, 0.5, 1.0]})]
+    reading, counts = calibrate(samples, V, F)
+    np.testing.assert_allclose(reading["nasion"], [1.5, 1.0, 0.0])      # not 1.25: family a is one vote
+    np.testing.assert_allclose(reading["menton"], [0.5, 0.5, 0.0])      # snapped onto the skin
+    assert counts == {"menton": 1, "nasion": 4}
+
+
+def test_the_built_in_reading_lies_on_the_generic_skin():
+    from autobones.geometry.closest import closest_points
+    from autobones.landmarks.assist import generic_skin
+    from autobones.landmarks.assist_calibration import built_in_reading
+
+    reading = built_in_reading()
+    g = generic_skin()[0]
+    assert set(REQUIRED).isdisjoint(reading) and set(reading) <= set(NAMES) and len(reading) >= 30
+    *_, d2 = closest_points(np.array(list(reading.values())), g.vertices, g.faces)
+    assert np.sqrt(d2).max() < 1e-9
+    ex = np.linalg.norm(g.landmarks["exocanthion_l"] - g.landmarks["exocanthion_r"])
+    # calibrated, not arbitrary: every name within half an ex-ex of the generic's own
+    assert max(np.linalg.norm(p - g.landmarks[n]) for n, p in reading.items()) < 0.5 * ex
+
+
+def test_on_profile_puts_menton_at_the_lowest_midline_point_near_it():
+    from autobones.landmarks.refine import midline_profile, on_profile, symmetry_plane
+
+    V, F, truth = _head("menpo3d/james")
+    unit = np.linalg.norm(truth["exocanthion_l"] - truth["exocanthion_r"])
+    start = dict(truth, menton=truth["menton"] + [0.0, 0.1 * unit, 0.05 * unit])   # off, above the chin
+    normal, offset = symmetry_plane(start)
+    out = on_profile(V, F, start, normal, offset, unit, names=("menton",))
+    assert abs(out["menton"] @ normal - offset) < 1e-6 * unit
+    assert any(np.allclose(out["menton"], p) for p in midline_profile(V, F, normal, offset))
+    assert np.linalg.norm(out["menton"] - truth["menton"]) < 0.05 * unit      # measured 0.008
+    assert out["pronasale"] is start["pronasale"]
