@@ -59,10 +59,9 @@ def _picked_points(landmarks, mesh):
     """The landmark file as MeshLab picked points (.pp), the format ``--landmarks`` also reads."""
     import json
 
-    points = json.loads(_data(landmarks).read_bytes())["landmarks"]
-    rows = [f' <point x="{p[0]!r}" y="{p[1]!r}" z="{p[2]!r}" active="1" name="{n}"/>' for n, p in points.items()]
-    return "\n".join(["<!DOCTYPE PickedPoints>", "<PickedPoints>", " <DocumentData>",
-                      f'  <DataFileName name="{mesh}"/>', " </DocumentData>", *rows, "</PickedPoints>", ""])
+    from .io.landmarks import picked_points_text
+
+    return picked_points_text(json.loads(_data(landmarks).read_bytes())["landmarks"], mesh)
 
 
 def write_samples(folder, force=False):

@@ -55,6 +55,11 @@ render (rasterise + shade + surface points), 2-D (the detector on the pictures),
 refine, and other (lift, combine, snap). Target: <= 3 s for a 30k-vertex head on
 this 2-core machine. No timing is asserted.
 
+``--assist [--variants as-is,rot1,x1000,dec5k] [--heads A,B]`` (issue #35): assisted landmarks, five
+names given from each landmarked head's file and the rest proposed (:mod:`landmarks_assist`).
+``--refit [--variants ...]`` (issue #35 part 3): the detected landmarks of the human heads against the
+generic head's fit from them, read off with a calibration held out by source family (measured; not shipped).
+
 ``--time`` (issue #14: <= 1.5 s per head after the model load): ``autobones.detect_landmarks``
 (orientation included) on the six heads above, LeePerrySmith, demosthenes and demosthenes
 Loop-subdivided twice (133,887 vertices, a bust scan's density), median of three calls per head
@@ -356,7 +361,31 @@ def main(argv=None):
     ap.add_argument("--time", action="store_true", help="issue #14's timing table only (seconds per head)")
     ap.add_argument("--baseline", metavar="REV", help="with --time: also time commit REV in the same minutes")
     ap.add_argument("--time-worker", nargs="+", metavar="MESH", help=argparse.SUPPRESS)
+    ap.add_argument("--assist", action="store_true", help="issue #35: assisted landmarks from 5 given names on every "
+                                                          "landmarked head (benchmarks/landmarks_assist.py)")
+    ap.add_argument("--variants", default="as-is", help="with --assist: comma-separated copies (as-is, rot1..rot6, "
+                                                        "x1000, x0.001, dec5k, remesh)")
+    ap.add_argument("--heads", help="with --assist: comma-separated head names (default: all)")
+    ap.add_argument("--reading", default="held-out", choices=("held-out", "shipped", "own"),
+                    help="with --assist: where names are read off the generic (see landmarks_assist.py)")
+    ap.add_argument("--refit", action="store_true", help="issue #35 part 3: detected landmarks vs the generic's "
+                                                         "fit from them, on the human heads (with --variants)")
     args = ap.parse_args(argv)
+    if args.refit:
+        import landmarks_assist
+
+        t0 = time.perf_counter()
+        landmarks_assist.refit_run(tuple(args.variants.split(",")))
+        print(f"\ntotal wall time {time.perf_counter() - t0:.0f} s")
+        return 0
+    if args.assist:
+        import landmarks_assist
+
+        t0 = time.perf_counter()
+        landmarks_assist.run(tuple(args.variants.split(",")), args.heads.split(",") if args.heads else None,
+                             args.reading)
+        print(f"\ntotal wall time {time.perf_counter() - t0:.0f} s")
+        return 0
     if args.time_worker:
         return time_worker(args.time_worker)
     if args.time:

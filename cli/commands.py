@@ -159,6 +159,13 @@ def cmd_pose(args):
 
 
 def cmd_landmarks(args):
+    if args.edit:
+        return _edit_landmarks(args)
+    from autobones.errors import AutobonesError
+
+    for given, option in ((args.pp, "--pp"), (args.port, "--port"), (args.no_browser, "--no-browser")):
+        if given:
+            raise AutobonesError(f"{option} goes with --edit (the landmark editor in the browser)")
     import autobones
     from autobones.io.landmarks import read_landmarks, validate_landmarks, write_landmarks
     from autobones.landmarks.preview import save_preview
@@ -166,11 +173,29 @@ def cmd_landmarks(args):
     t = time.perf_counter()
     out = args.output or (None if args.source and args.preview else
                           os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
-    _never_the_input([out, args.preview], [args.head, args.source])
+    from autobones.errors import AutobonesError
+
+    if args.source and args.assist:
+        raise AutobonesError("--from reads every landmark from a file and --assist proposes them from a few: "
+                             "give one of them")
+    _never_the_input([out, args.preview], [args.head, args.source, args.assist])
     watch = stopwatch()
     V, F = autobones.load_mesh(args.head)
     watch.lap("load")
-    if args.source:
+    if args.assist:
+        from autobones.landmarks.assist import assist_landmarks
+
+        given = validate_landmarks(read_landmarks(args.assist), V, F, min_count=1, source=args.assist)
+        with progress(args, "fitting the generic head"):
+            found = assist_landmarks(V, F, given, rig=args.rig)
+        lm, frame, confidence = found.points, found.frame, found.confidence
+        proposed = [n for n in lm if n not in given]
+        how = (f"from {args.assist} ({len(given)} given), {len(proposed)} proposed, mean confidence "
+               f"{sum(confidence[n] for n in proposed) / max(len(proposed), 1):.2f}")
+        if found.omitted:
+            how += "; omitted " + ", ".join(sorted(found.omitted))
+        watch.lap("assist")
+    elif args.source:
         frame = autobones.detect_frame(V, F, up=args.up, front=args.front) if args.up or args.front else None
         lm = validate_landmarks(read_landmarks(args.source), V, F, frame=frame, min_count=1, source=args.source)
         watch.lap("check")
@@ -193,6 +218,46 @@ def cmd_landmarks(args):
         watch.lap("write")
     print(f"{out or args.preview}: {len(lm)} landmarks {how}, {time.perf_counter() - t:.1f} s"
           + (f"; preview {args.preview}" if args.preview and out else ""))
+    return 0
+
+
+def _edit_landmarks(args):
+    """``landmarks HEAD --edit``: serve the editor until the page says done or Ctrl-C."""
+    from autobones.errors import AutobonesError
+    from autobones.view.editor_server import make_editor_server
+    from autobones.view.landmark_session import open_session
+    from autobones.view.server import parse_port
+
+    if args.preview:
+        raise AutobonesError("--preview draws landmarks from a file; with --edit, save them first, then "
+                             "autobones landmarks HEAD --from SAVED --preview PNG")
+    if args.source and args.assist:
+        raise AutobonesError("--from and --assist both name the landmarks to start from: give one of them")
+    port = parse_port(args.port if args.port is not None else 0)  # refused before the mesh is read
+    watch = stopwatch()
+    with progress(args, "reading the head" + ("" if args.source or args.assist else " and finding landmarks")):
+        # --assist PARTIAL: its names placed, and the page proposes the rest from them at once
+        session = open_session(args.head, output=args.output, pp=args.pp, source=args.source or args.assist,
+                               up=args.up, front=args.front, rig=args.rig)
+    watch.lap("load")
+    server = make_editor_server(session, port)
+    watch.lap("serve")
+    print(server.url, flush=True)  # first line: scripts read the URL from here
+    print(f"autobones landmarks: editing {args.head}; Save writes {session.output}"
+          + (f" and {session.pp_output}" if session.pp_output else "") + "; Done on the page or Ctrl-C stops",
+          file=sys.stderr, flush=True)
+    if not args.no_browser:
+        import webbrowser
+
+        webbrowser.open(server.url)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        print("autobones landmarks: stopped", file=sys.stderr)
+    finally:
+        server.server_close()
+    print(f"autobones landmarks: saved {', '.join(session.saved)}" if session.saved
+          else "autobones landmarks: closed without saving; nothing written", file=sys.stderr)
     return 0
 
 

@@ -54,6 +54,9 @@ examples:
   autobones landmarks scan.obj -o scan.landmarks.json --preview scan.png
   autobones landmarks goat.obj --from goat.pp --preview goat.png        convert a file and draw it
   autobones landmarks bust.stl --up +z --front -y -o bust.landmarks.json
+  autobones landmarks cow.obj --assist cow5.json -o cow.landmarks.json   the rest from 5 placed names
+  autobones landmarks cow.obj --edit -o cow.landmarks.json              place and check them in the browser
+  autobones landmarks goat.obj --edit --from goat.pp -o goat.pp         edit a MeshLab file (and its JSON)
 
 How: the head is turned upright, rendered on the CPU from the front and four views around it
 (+-30 deg yaw, +-15 deg pitch), MediaPipe Face Mesh finds 468 points in each picture, they are
@@ -63,8 +66,21 @@ the midline profile. A name whose views disagree is dropped, not guessed; a pair
 disagree is flagged. 27 of the contract's names are found (the ones a face picture shows).
 
 Animals, most cartoons and back-of-head scans have no face the detector knows: the command
-says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp).
+says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp), or
+place five (the outer eye corners, the nose tip, the mouth corners) and let --assist propose the
+rest: the generic head is fitted to the mesh through them and its own landmarks read off it
+("confidence" then falls with the distance from the placed names and where the fit meets the
+surface poorly).
 Needs the optional detector: pip install 'autobones[landmarks]'.
+
+--edit: a page on 127.0.0.1 (the first line printed is its URL; --no-browser opens none, --port 0
+picks a free port). Click the head to place the selected name, drag a point to move it, Ctrl+Z /
+Ctrl+Shift+Z undo and redo; a left or right name's partner is proposed across the symmetry plane, and
+once exocanthion_l/_r, pronasale and cheilion_l/_r are placed the rest are proposed as with --assist.
+transfer's checks (off the surface, units, left/right swapped, too few) show beside each name as you
+go. Save writes -o atomically (and a MeshLab .pp with --pp, or when -o ends in .pp); closing the page
+without saving writes nothing; Done or Ctrl-C stops. It starts from --from or --assist, else from
+automatic detection (no face found: empty, with a note on the page).
 
 output: the contract's JSON ({"format": "autobones-landmarks/1", "landmarks": {name: [x, y, z]}}),
 in the mesh's own frame and units, plus "confidence" per name (1 = every view agrees).

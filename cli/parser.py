@@ -157,7 +157,8 @@ def add_pose(sub):
 def add_landmarks(sub):
     """The ``landmarks`` command's arguments."""
     m = sub.add_parser(
-        "landmarks", help="find the contract's landmarks on a human head automatically, or draw given ones",
+        "landmarks", help="find the contract's landmarks on a human head automatically, draw given ones, "
+                          "or place them by hand in the browser (--edit)",
         description="Find the landmark contract's names on a human or human-like head automatically "
                     "(render, detect in 2-D, lift to the surface), write them as the contract's JSON in "
                     "the mesh's own frame, and optionally draw a picture to check them by eye.",
@@ -167,7 +168,17 @@ def add_landmarks(sub):
                                           "in the current folder (none with --from and only --preview)")
     m.add_argument("--from", dest="source", metavar="FILE",
                    help="read the landmarks from FILE (contract .json, MeshLab .pp, iBUG-68) instead of detecting")
+    m.add_argument("--assist", metavar="PARTIAL",
+                   help="propose the other names from a few placed in PARTIAL (at least exocanthion_l/_r, "
+                        "pronasale, cheilion_l/_r): the generic head fitted to the mesh; any head, animals too")
+    m.add_argument("--rig", help="generic rig folder for --assist (default: the built-in one)")
     m.add_argument("--preview", metavar="PNG", help="also draw a front and a side picture with every landmark named")
+    m.add_argument("--edit", action="store_true",
+                   help="place, move and check them by hand in the browser (starting from --from, else from "
+                        "automatic detection); Save writes -o, nothing is written before")
+    m.add_argument("--pp", metavar="FILE.pp", help="with --edit: also save MeshLab picked points (as -o X.pp does)")
+    m.add_argument("--port", help="with --edit: port on 127.0.0.1 (default: a free one)")
+    m.add_argument("--no-browser", action="store_true", help="with --edit: print the URL only, open no browser")
     _axes(m)
     _common(m)
 

@@ -12,8 +12,10 @@ SOURCES = {"autobones": ROOT / "autobones", "autobones.cli": ROOT / "cli",
            "autobones.generic_rig": ROOT / "generic_rig"}
 PIPELINES = ("placement", "rig_transfer", "rig_building", "landmarks", "expressions")
 # the only pipeline-to-pipeline imports: placing on a transferred rig, finding landmarks for a
-# transfer, and labelling a generic rig's depth groups as placing does
-ALLOWED_BETWEEN = {("placement", "rig_transfer"), ("rig_transfer", "landmarks"), ("rig_building", "placement")}
+# transfer, labelling a generic rig's depth groups as placing does, and proposing landmarks by the
+# generic head's fit (landmarks.assist uses the correspondence, never rig_transfer.pipeline)
+ALLOWED_BETWEEN = {("placement", "rig_transfer"), ("rig_transfer", "landmarks"), ("rig_building", "placement"),
+                   ("landmarks", "rig_transfer")}
 
 
 def _modules():

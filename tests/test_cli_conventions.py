@@ -250,6 +250,7 @@ def _grammar(line):
     ["export", "robot.glb", "-o", "robot.glb"],
     ["export", "robot.glb", "-o", "x.abc"],
     ["landmarks", "s/goat.obj", "--from", "missing.pp"],
+    ["landmarks", "s/goat.obj", "--assist", "one.landmarks.json"],
     ["samples", "s"],
     ["batch", "in", "-o", "in"],
     ["view", "nothing_here.glb", "--no-browser"],

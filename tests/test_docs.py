@@ -65,7 +65,8 @@ def test_every_tutorial_shows_commands_and_starts_with_the_samples():
 
 
 def _view(cmd, cwd):
-    """``autobones view`` serves until stopped: run it without a browser, read its address, stop it."""
+    """``autobones view`` (and ``landmarks --edit``) serve until stopped: run without a browser, read the
+    address, stop it (an editor stopped so has saved nothing)."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     p = subprocess.Popen([sys.executable, "-m", "cli.main", *shlex.split(cmd)[1:], "--no-browser"], cwd=cwd, env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -87,7 +88,7 @@ def test_every_tutorial_command_runs_as_written(tmp_path, monkeypatch, capsys, p
 
     monkeypatch.chdir(tmp_path)
     for cmd in _commands(page):
-        if cmd.startswith("autobones view"):
+        if cmd.startswith("autobones view") or " --edit" in cmd:  # both serve a page until stopped
             _view(cmd, tmp_path)
             continue
         if cmd.startswith("autobones "):

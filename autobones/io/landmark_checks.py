@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 from .landmark_names import BILATERAL, NAME_INDEX, NAMES
 
 # Global scales tried when landmarks miss the surface, and what each one means.
@@ -94,6 +94,67 @@ def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, sour
     return clean
 
 
+def landmark_problems(landmarks, V, F, frame=None, min_count=10, max_off_surface=0.05):
+    """What :func:`validate_landmarks` would refuse in ``landmarks``, listed per name instead of raised.
+
+    For a landmark editor that shows the checks as the user goes: the same tests and thresholds
+    (:func:`surface_offsets`, :func:`unit_hint`, :func:`same_point_pairs`, :func:`on_one_line`,
+    :func:`swapped_sides`), so a set with no problem here passes ``validate_landmarks`` with the same
+    arguments. Parameters as there.
+
+    Returns
+    -------
+    dict
+        ``{"names": {name: [one-line problem, ...]}, "set": [problem of the set as a whole, ...]}``;
+        names without a problem are left out.
+    """
+    names_out, set_out = {}, []
+
+    def add(name, text):
+        names_out.setdefault(name, []).append(text)
+
+    try:
+        clean = _values(landmarks, "landmarks")
+    except AutobonesError as exc:
+        return {"names": {}, "set": [str(exc)]}
+    if len(clean) < min_count:
+        set_out.append(f"{len(clean)} placed; at least {min_count} well-spread landmarks are needed")
+    if not clean:
+        return {"names": names_out, "set": set_out}
+    names = list(clean)
+    P = np.array([clean[n] for n in names])
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    head = float((V.max(axis=0) - V.min(axis=0)).max())
+    for i, j in same_point_pairs(P, head):
+        add(names[i], f"at the same point as {names[j]}")
+        add(names[j], f"at the same point as {names[i]}")
+    if on_one_line(P):
+        set_out.append(f"all {len(P)} landmarks lie on one line; spread them over the face")
+    d = surface_offsets(P, V, F, head)
+    far = d > max_off_surface
+    for i in np.flatnonzero(far):
+        add(names[i], f"off the surface: {d[i]:.2g} head sizes away (at most {max_off_surface:g})")
+    hint = unit_hint(P, far, V, F, head, max_off_surface) if far.any() else None
+    if hint is not None:
+        set_out.append(f"wrong units? scaled by {hint[0]:g} the landmarks lie on the surface ({hint[1]})")
+    if frame is not None:
+        pairs, swapped, mirrored = swapped_sides(clean, frame)
+        if mirrored:
+            set_out.append(f"left and right are swapped (mirrored set) in {len(swapped)} of {len(pairs)} pairs; "
+                           "_l is the subject's own left (the viewer's right from the front)")
+        for base in swapped:
+            add(f"{base}_l", f"left/right swapped: on the subject's right, {base}_r is on the left")
+            add(f"{base}_r", f"left/right swapped: on the subject's left, {base}_l is on the right")
+    return {"names": names_out, "set": set_out}
+
+
+def landmark_values(landmarks, source="landmarks"):
+    """Contract names with 3 finite numbers each, as (3,) float64 copies in :data:`NAMES` order; one
+    AutobonesError for unknown names or bad values. Only these checks: none of the set or the mesh."""
+    return _values(landmarks, source)
+
+
 def _values(landmarks, source):
     """Contract names and 3 finite numbers each: (3,) float64 copies in :data:`NAMES` order."""
     if not isinstance(landmarks, Mapping):
@@ -119,63 +180,91 @@ def _values(landmarks, source):
 
 
 def _check_spread(P, names, head, source):
-    # work on P / max|P| so that huge (finite) coordinates cannot overflow
     m = float(np.abs(P).max())
     Q = P / m if m > 0 else P
     spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
     if len(P) > 1 and spread == 0.0:
         raise AutobonesError(f"{source}: all {len(P)} landmarks are at the same point {P[0].tolist()}; "
                              f"place each where the contract describes it")
+    pairs = same_point_pairs(P, head)
+    if pairs:
+        shown = ", ".join(f"{names[i]} = {names[j]}" for i, j in pairs[:4])
+        more = f" and {len(pairs) - 4} more" if len(pairs) > 4 else ""
+        raise AutobonesError(f"{source}: landmarks at the same point ({shown}{more}); "
+                             f"each landmark marks a different place, fix the copied coordinates")
+    if on_one_line(P):
+        raise AutobonesError(f"{source}: all {len(P)} landmarks lie on one line; "
+                             f"they must spread over the face (check for a dropped coordinate)")
+
+
+def same_point_pairs(P, head=None):
+    """Index pairs ``(i, j)`` of the (k, 3) points ``P`` that coincide (within 1e-7 of the head size
+    ``head``, or of the points' own spread without one), sorted."""
+    if len(P) < 2:
+        return []
+    from scipy.spatial import cKDTree
+
+    # work on P / max|P| so that huge (finite) coordinates cannot overflow
+    m = float(np.abs(P).max())
+    Q = P / m if m > 0 else P
+    spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
     scale = head / m if head and m > 0 else spread
-    tol = 1e-7 * scale
-    if len(P) > 1:
-        from scipy.spatial import cKDTree
-
-        pairs = sorted(cKDTree(Q).query_pairs(tol))
-        if pairs:
-            shown = ", ".join(f"{names[i]} = {names[j]}" for i, j in pairs[:4])
-            more = f" and {len(pairs) - 4} more" if len(pairs) > 4 else ""
-            raise AutobonesError(f"{source}: landmarks at the same point ({shown}{more}); "
-                                 f"each landmark marks a different place, fix the copied coordinates")
-    if len(P) >= 3:
-        s = np.linalg.svd(Q - Q.mean(axis=0), compute_uv=False)
-        if s[1] <= 1e-6 * s[0]:
-            raise AutobonesError(f"{source}: all {len(P)} landmarks lie on one line; "
-                                 f"they must spread over the face (check for a dropped coordinate)")
+    return sorted(cKDTree(Q).query_pairs(1e-7 * scale))
 
 
-def _check_surface(P, names, V, F, head, source, max_off):
+def on_one_line(P):
+    """True when three or more points ``P`` (k, 3) lie on one line (they cannot fix a frame)."""
+    if len(P) < 3:
+        return False
+    m = float(np.abs(P).max())
+    Q = P / m if m > 0 else P
+    s = np.linalg.svd(Q - Q.mean(axis=0), compute_uv=False)
+    return bool(s[1] <= 1e-6 * s[0])
+
+
+def surface_offsets(P, V, F, head):
+    """Distance of each point ``P`` (k, 3) from the surface of (V, F), in head sizes ``head``
+    (input units); ``inf`` for every point when any is not finite."""
     import igl
 
     from ..geometry.closest import FEW, near_faces
 
-    def off(Q):
-        if not np.isfinite(Q).all():
-            return np.full(len(Q), np.inf)
-        Q = np.ascontiguousarray(Q, dtype=np.float64)
-        # a few landmarks on a scan: only the triangles that can hold their closest points
-        Fq = F[near_faces(Q, V, F)] if len(Q) * FEW < len(F) else F
-        d2, _, _ = igl.point_mesh_squared_distance(Q, V, np.ascontiguousarray(Fq))
-        return np.sqrt(np.asarray(d2, dtype=np.float64)) / head
+    if not np.isfinite(P).all():
+        return np.full(len(P), np.inf)
+    Q = np.ascontiguousarray(P, dtype=np.float64)
+    # a few landmarks on a scan: only the triangles that can hold their closest points
+    Fq = F[near_faces(Q, V, F)] if len(Q) * FEW < len(F) else F
+    d2, _, _ = igl.point_mesh_squared_distance(Q, V, np.ascontiguousarray(Fq))
+    return np.sqrt(np.asarray(d2, dtype=np.float64)) / head
 
-    d = off(P)
+
+def unit_hint(P, far, V, F, head, max_off):
+    """What the points ``P`` (k, 3) look like when a global scale puts most of them on the surface
+    (``'millimetres for a mesh in metres'``...), None otherwise; ``far`` (k,) bool marks those off it now."""
+    best = None
+    for scale, meaning in _UNIT_HINTS:
+        with np.errstate(over="ignore"):
+            scaled = P * scale
+        near = int((surface_offsets(scaled, V, F, head) <= max_off).sum())
+        if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
+            best = (near, scale, meaning)
+    return None if best is None else best[1:]
+
+
+def _check_surface(P, names, V, F, head, source, max_off):
+    d = surface_offsets(P, V, F, head)
     far = d > max_off
     if not far.any():
         return
     order = np.argsort(-d)
     worst = ", ".join(f"{names[i]} {d[i]:.2g}" for i in order[:min(4, int(far.sum()))])
     more = f" and {int(far.sum()) - 4} more" if far.sum() > 4 else ""
-    msg = (f"{source}: {int(far.sum())} of {len(P)} landmarks lie far from the mesh surface "
+    msg = (f"{source}: {int(far.sum())} of {counted(len(P), 'landmark')} {'lies' if far.sum() == 1 else 'lie'} "
+           "far from the mesh surface "
            f"({worst}{more} head sizes; at most {max_off:g} allowed)")
-    best = None
-    for scale, meaning in _UNIT_HINTS:
-        with np.errstate(over="ignore"):
-            scaled = P * scale
-        near = int((off(scaled) <= max_off).sum())
-        if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
-            best = (near, scale, meaning)
-    if best is not None:
-        _, scale, meaning = best
+    hint = unit_hint(P, far, V, F, head, max_off)
+    if hint is not None:
+        scale, meaning = hint
         msg += (f"; wrong units? scaled by {scale:g} they lie on the surface, so they look like {meaning}: "
                 f"give the landmarks in the mesh's units")
     else:
@@ -183,24 +272,37 @@ def _check_surface(P, names, V, F, head, source, max_off):
     raise AutobonesError(msg)
 
 
-def _check_sides(clean, frame, source):
+def swapped_sides(clean, frame):
+    """The bilateral pairs of ``clean`` whose ``_l`` and ``_r`` are exchanged, as the transfer judges them.
+
+    Returns ``(pairs, swapped, mirrored)``: the base names with both sides given, those of them
+    refused, and whether the whole set is mirrored (more than half the pairs have their ``_l`` point
+    on the subject's right: then every such pair is refused; otherwise only the pairs clearly across,
+    by more than 0.01 head sizes, since a pair near the midline may cross by a hair).
+    """
     pairs = [b for b in BILATERAL if f"{b}_l" in clean and f"{b}_r" in clean]
     if not pairs:
-        return
+        return [], [], False
     L = frame.to_canonical(np.array([clean[f"{b}_l"] for b in pairs]))
     R = frame.to_canonical(np.array([clean[f"{b}_r"] for b in pairs]))
     dx = L[:, 0] - R[:, 0]
     inverted = dx < 0
-    if inverted.sum() * 2 > len(pairs):
+    mirrored = bool(inverted.sum() * 2 > len(pairs))
+    bad = inverted if mirrored else inverted & (dx < -0.01)
+    return pairs, [pairs[i] for i in np.flatnonzero(bad)], mirrored
+
+
+def _check_sides(clean, frame, source):
+    pairs, swapped, mirrored = swapped_sides(clean, frame)
+    if mirrored:
         raise AutobonesError(
-            f"{source}: left and right are swapped (mirrored set): in {int(inverted.sum())} of {len(pairs)} pairs "
+            f"{source}: left and right are swapped (mirrored set): in {len(swapped)} of {len(pairs)} pairs "
             f"the _l point is on the subject's right; _l is the subject's own left (the viewer's right in a "
             f"frontal picture), exchange _l and _r (if they are right, the head's detected up or front is wrong: "
             f"give them explicitly)")
-    clear = inverted & (dx < -0.01)  # a pair close to the midline may cross by a hair
-    if clear.any():
+    if swapped:
         raise AutobonesError(
-            f"{source}: {_list(pairs[i] for i in np.flatnonzero(clear))} have _l and _r exchanged "
+            f"{source}: {_list(swapped)} have _l and _r exchanged "
             f"(the _l point lies on the subject's right); swap the names of that pair")
 
 

@@ -37,3 +37,56 @@ def mirror_name(name):
     if name in MIDLINE:
         return name
     return name[:-1] + ("r" if name.endswith("_l") else "l")
+
+
+#: Where each name goes (``spec/landmarks.md``), by midline or bilateral base name.
+WHERE = {
+    "vertex": "top of the head, highest midline point of the skull in upright pose",
+    "opisthocranion": "back of the head, most posterior midline point",
+    "glabella": "smooth prominence between the eyebrows",
+    "nasion": "deepest point of the nasal bridge, between the eyes",
+    "pronasale": "nose tip, most anterior point of the nose (a muzzle tip on an animal)",
+    "subnasale": "where the base of the nose meets the upper lip",
+    "labiale_superius": "midpoint of the upper lip's vermilion border",
+    "stomion": "midpoint of the line where the lips meet",
+    "labiale_inferius": "midpoint of the lower lip's vermilion border",
+    "sublabiale": "deepest point of the crease between lower lip and chin",
+    "pogonion": "most anterior point of the chin",
+    "menton": "lowest point of the chin",
+    "exocanthion": "outer corner of the eye",
+    "endocanthion": "inner corner of the eye",
+    "palpebrale_superius": "highest point of the upper eyelid margin",
+    "palpebrale_inferius": "lowest point of the lower eyelid margin",
+    "brow_inner": "inner (medial) end of the eyebrow",
+    "brow_middle": "highest point of the eyebrow",
+    "brow_outer": "outer (lateral) end of the eyebrow",
+    "alare": "outer end of the nostril base, where the nose wing meets the cheek",
+    "crista_philtri": "peak of the upper lip (Cupid's bow)",
+    "cheilion": "corner of the mouth",
+    "zygion": "most lateral point of the cheekbone",
+    "gonion": "angle of the jaw",
+    "tragion": "notch above the tragus of the ear",
+    "superaurale": "highest point of the ear",
+    "subaurale": "lowest point of the earlobe",
+    "frontotemporale": "temple: most medial point of the temporal ridge on the forehead",
+}
+
+#: The 44 names by part of the head, for a list a person works down: (group, names in contract order).
+GROUPS = (
+    ("midline", MIDLINE),
+    ("eyes and brows", tuple(f"{b}_{s}" for b in ("exocanthion", "endocanthion", "palpebrale_superius",
+                                                   "palpebrale_inferius", "brow_inner", "brow_middle", "brow_outer",
+                                                   "frontotemporale") for s in "lr")),
+    ("nose", ("alare_l", "alare_r")),
+    ("mouth", tuple(f"{b}_{s}" for b in ("crista_philtri", "cheilion") for s in "lr")),
+    ("jaw and cheeks", tuple(f"{b}_{s}" for b in ("zygion", "gonion") for s in "lr")),
+    ("ears", tuple(f"{b}_{s}" for b in ("tragion", "superaurale", "subaurale") for s in "lr")),
+)
+
+
+def where(name):
+    """Where ``name`` goes on the head, one line (the spec's table; ``_l``/``_r`` say the subject's side)."""
+    if name in MIDLINE:
+        return WHERE[name]
+    side = "subject's left" if name.endswith("_l") else "subject's right"
+    return f"{WHERE[name[:-2]]} ({side})"

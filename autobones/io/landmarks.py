@@ -34,7 +34,8 @@ from .landmark_checks import quoted, shorten, validate_landmarks
 from .landmark_names import BILATERAL, MIDLINE, NAME_INDEX, NAMES, mirror_name
 
 __all__ = ["BILATERAL", "FORMAT", "IBUG68", "IBUG_COUNT", "MIDLINE", "NAMES", "NAME_INDEX", "mirror_name",
-           "read_landmarks", "resolve_landmarks", "validate_landmarks", "write_landmarks"]
+           "picked_points_text", "read_landmarks", "resolve_landmarks", "validate_landmarks", "write_landmarks",
+           "write_picked_points"]
 
 log = logging.getLogger(__name__)
 
@@ -446,3 +447,23 @@ def write_landmarks(path, landmarks, mesh_name=None, confidence=None):
     lines.append("}")
     text = "\n".join(lines) + "\n"
     write_text_atomic(path, text, "the landmark file")
+
+
+def picked_points_text(landmarks, mesh_name=None):
+    """Landmarks as MeshLab picked points (``.pp`` XML, what its PickPoints tool saves and
+    :func:`read_landmarks` reads): one ``<point x= y= z= active="1" name=/>`` per name, in the
+    order given, coordinates as Python's shortest round-trip repr."""
+    from xml.sax.saxutils import quoteattr
+
+    rows = [f' <point x="{float(p[0])!r}" y="{float(p[1])!r}" z="{float(p[2])!r}" active="1" name={quoteattr(n)}/>'
+            for n, p in landmarks.items()]
+    head = [f"  <DataFileName name={quoteattr(str(mesh_name))}/>"] if mesh_name is not None else []
+    return "\n".join(["<!DOCTYPE PickedPoints>", "<PickedPoints>", " <DocumentData>", *head, " </DocumentData>",
+                      *rows, "</PickedPoints>", ""])
+
+
+def write_picked_points(path, landmarks, mesh_name=None):
+    """Write landmarks as a MeshLab ``.pp`` file, atomically; checked as :func:`write_landmarks` does."""
+    path = os.fspath(path)
+    clean = validate_landmarks(landmarks, min_count=1, source=path)
+    write_text_atomic(path, picked_points_text(clean, mesh_name), "the picked-points file")

@@ -99,24 +99,50 @@ def refine(Vc, F, points, unit, max_mirror_error):
             # its own views disagreed: the mirror image of the other side stands in
             out[mirror_name(n)] = reflect(out[n], n_, c)
             flagged[mirror_name(n)] = f"mirrored from {n}"
-    # the face's own vertical: eye corners over the mouth, in the mirror plane
+    return on_profile(Vc, F, out, n_, c, unit), flagged
+
+
+def on_profile(V, F, points, normal, offset, unit, names=("pronasale", "menton")):
+    """``pronasale`` as the most anterior and ``menton`` as the lowest point of the midline profile near
+    where they are, in the face's own frame (up: the eye corners over the mouth, in the mirror plane).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertices, any frame and units (the face's frame comes from the points).
+    F : (m, 3) int
+    points : dict of str -> (3,)
+        Landmarks, same frame; needs eye corners and a midline mouth name, else returned unchanged.
+    normal, offset : (3,) float, float
+        The mirror plane (:func:`symmetry_plane`).
+    unit : float
+        ex-ex distance, mesh units (the search reaches 0.15 ex-ex for pronasale, 0.25 for menton).
+    names : tuple of str
+        Which of the two to move.
+
+    Returns
+    -------
+    dict of str -> (3,)
+        A copy of ``points`` with those names moved (points of the profile, on the surface).
+    """
+    out = dict(points)
     eyes = [out[k] for k in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "endocanthion_r") if k in out]
     mouth = [out[k] for k in ("stomion", "labiale_superius", "labiale_inferius") if k in out]
     if not eyes or not mouth:
-        return out, flagged
+        return out
     up = np.mean(eyes, axis=0) - np.mean(mouth, axis=0)
-    up -= (up @ n_) * n_
+    up -= (up @ normal) * normal
     up /= np.linalg.norm(up)
-    front = np.cross(n_, up)
-    profile = midline_profile(Vc, F, n_, c)
+    front = np.cross(normal, up)
+    profile = midline_profile(V, F, normal, offset)
     tilt = np.radians(PROFILE_TILT)
     for name, direction, reach in (
             # the eye-mouth line leans back from the Frankfort vertical, so straight ahead
             # and straight down in the face's frame are turned by PROFILE_TILT
             ("pronasale", np.cos(tilt) * front - np.sin(tilt) * up, 0.15),
             ("menton", -np.cos(tilt) * up + np.sin(tilt) * front, 0.25)):
-        if name in out and len(profile):
+        if name in names and name in out and len(profile):
             near = profile[np.linalg.norm(profile - out[name], axis=1) < reach * unit]
             if len(near):
                 out[name] = near[np.argmax(near @ direction)]
-    return out, flagged
+    return out

@@ -61,15 +61,33 @@ class ViewServer(BoundedHTTPServer):
         self.token = new_token()
         self.served = served_files(site)
         self.thumbnails = ThumbnailCache()
-        try:
-            super().__init__((HOST, int(port)), ViewHandler)
-        except OSError as exc:
-            if exc.errno == errno.EADDRINUSE:
-                raise AutobonesError(f"--port {port}: the port is in use; choose another or leave --port out "
-                                     "(a free one is picked)") from None
-            raise AutobonesError(f"--port {port}: cannot listen on {HOST} ({exc.strerror or exc})") from None
-        self.port = self.server_address[1]
-        self.url = f"http://{HOST}:{self.port}/{self.token}/"
+        listen(self, port, ViewHandler)
+
+
+def listen(server, port, handler):
+    """Bind ``server`` (a :class:`BoundedHTTPServer` being made) to 127.0.0.1:``port`` and set its ``port``
+    and ``url`` (``http://127.0.0.1:PORT/TOKEN/``, ``server.token`` set already); AutobonesError when
+    the port is taken or cannot be listened on."""
+    try:
+        BoundedHTTPServer.__init__(server, (HOST, int(port)), handler)
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            raise AutobonesError(f"--port {port}: the port is in use; choose another or leave --port out "
+                                 "(a free one is picked)") from None
+        raise AutobonesError(f"--port {port}: cannot listen on {HOST} ({exc.strerror or exc})") from None
+    server.port = server.server_address[1]
+    server.url = f"http://{HOST}:{server.port}/{server.token}/"
+
+
+def parse_port(port):
+    """``--port`` as a whole number 0..65535 (0: a free one); AutobonesError otherwise."""
+    try:
+        port = int(str(port).strip())
+    except (TypeError, ValueError):
+        raise AutobonesError(f"--port {port!r}: give a whole number 1..65535") from None
+    if not 0 <= port <= 65535:
+        raise AutobonesError(f"--port {port}: give a whole number 1..65535")
+    return port
 
 
 def make_server(path, port=0):
@@ -85,12 +103,7 @@ def make_server(path, port=0):
     Call ``server.serve_forever()`` to answer requests (``server.url``), ``server.shutdown()`` from
     another thread to stop, ``server.server_close()`` to release the port.
     """
-    try:
-        port = int(str(port).strip())
-    except (TypeError, ValueError):
-        raise AutobonesError(f"--port {port!r}: give a whole number 1..65535") from None
-    if not 0 <= port <= 65535:
-        raise AutobonesError(f"--port {port}: give a whole number 1..65535")
+    port = parse_port(port)  # before the folder is read: a bad option costs nothing
     return ViewServer(open_site(path), port)
 
 
@@ -132,19 +145,30 @@ class ViewHandler(TimedHandler):
             log.debug("traceback", exc_info=True)
             return self._send_error(HTTPStatus.INTERNAL_SERVER_ERROR, f"{type(exc).__name__}: {exc}")
 
-    def _route(self):
+    def _gate(self):
+        """``(route, query)`` of a request from this server's own page, or None once refused (403 for a
+        foreign Host or a missing token) or redirected (``/TOKEN`` -> ``/TOKEN/``)."""
         host = (self.headers.get("Host") or "").lower()
         port = self.server.port
         if host not in (f"127.0.0.1:{port}", f"localhost:{port}"):
-            return self._send_error(HTTPStatus.FORBIDDEN, "unknown Host")
+            self._send_error(HTTPStatus.FORBIDDEN, "unknown Host")
+            return None
         url = urlsplit(self.path)
         ok, route = split_token(url.path, self.server.token)
         if not ok:  # the same answer for any path: nothing about the folder is told without the token
-            return self._send_error(HTTPStatus.FORBIDDEN, "no token: open the URL that autobones view printed")
+            self._send_error(HTTPStatus.FORBIDDEN, "no token: open the URL that autobones printed")
+            return None
         if route is None:  # /TOKEN: the page's relative URLs need the trailing slash
             where = f"/{self.server.token}/" + (f"?{url.query}" if url.query else "")
-            return self._send_bytes(b"", "text/plain", False, HTTPStatus.MOVED_PERMANENTLY, {"Location": where})
-        query = {k: v[-1] for k, v in parse_qs(url.query).items()}
+            self._send_bytes(b"", "text/plain", False, HTTPStatus.MOVED_PERMANENTLY, {"Location": where})
+            return None
+        return route, {k: v[-1] for k, v in parse_qs(url.query).items()}
+
+    def _route(self):
+        gated = self._gate()
+        if gated is None:
+            return None
+        route, query = gated
         if route in ("/", "/index.html"):
             return self._send_file(os.path.join(STATIC, "index.html"), cache=False)
         if route.startswith("/static/"):
