@@ -66,10 +66,10 @@ disagree is flagged. 27 of the contract's names are found (the ones a face pictu
 Animals, most cartoons and back-of-head scans have no face the detector knows: the command
 says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp), or
 place five (the outer eye corners, the nose tip, the mouth corners) and let --assist propose the
-rest: the generic head is fitted to the mesh through them and its own landmarks read off it
+rest: the generic head is fitted to the mesh through them and its landmarks read off it
 ("confidence" then falls with the distance from the placed names and where the fit meets the
-surface poorly).
-Needs the optional detector: pip install 'autobones[landmarks]'.
+surface poorly; check the proposals, they are a start, not a measurement).
+Finding them automatically needs the optional detector: pip install 'autobones[landmarks]'.
 
 output: the contract's JSON ({"format": "autobones-landmarks/1", "landmarks": {name: [x, y, z]}}),
 in the mesh's own frame and units, plus "confidence" per name (1 = every view agrees).

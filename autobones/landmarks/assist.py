@@ -264,7 +264,7 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None):
         found, c = _read_names(fit, V, F, [reading[n] for n in wanted], given, unit)
         points.update(zip(wanted, found))
         conf.update(zip(wanted, map(float, c)))
-    human = face_distance(given, generic.landmarks) <= HUMAN_FACE
+    human = all(n in generic.landmarks for n in REQUIRED) and face_distance(given, generic.landmarks) <= HUMAN_FACE
     if human and "menton" in points and "menton" not in given:
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
