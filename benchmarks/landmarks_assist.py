@@ -238,6 +238,16 @@ def refit_run(variants=("as-is",)):
         cells = " | ".join(f"{np.mean([x[i] for x in e.values()]):.2f} / {max(x[i] for x in e.values()):.1f}"
                            for i in range(3))
         print(f"| {h} | {f} | {v} | {len(e)} | {cells} | {td:.2f} | {tf:.2f} |")
+    fams = sorted({f for _, f, _, _, _, _ in errs})
+    print("\n| family | " + " | ".join(f"{v}: detected / refit / mean" for v in variants) + " |")
+    print("|---|" + "---|" * len(variants))
+    for f in fams:
+        cells = []
+        for v in variants:
+            sel = [e for _, ff, vv, e, _, _ in errs if ff == f and vv == v]
+            cells.append(" / ".join(f"{np.mean([x[i] for e in sel for x in e.values()]):.2f}" for i in range(3))
+                         if sel else "-")
+        print(f"| {f} | " + " | ".join(cells) + " |")
     print("\n| variant | head x name | " + " | ".join(f"{k} pooled mean" for k in kinds)
           + " | " + " | ".join(f"{k} worst name (mean over heads)" for k in kinds) + " |")
     print("|---|---:|" + "---:|" * len(kinds) + "---|" * len(kinds))

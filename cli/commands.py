@@ -175,6 +175,8 @@ def cmd_landmarks(args):
                           os.path.splitext(os.path.basename(args.head))[0] + ".landmarks.json")
     from autobones.errors import AutobonesError
 
+    if args.rig and not args.assist:
+        raise AutobonesError("--rig is the generic rig --assist fits: give --assist PARTIAL too")
     if args.source and args.assist:
         raise AutobonesError("--from reads every landmark from a file and --assist proposes them from a few: "
                              "give one of them")

@@ -68,10 +68,10 @@ disagree is flagged. 27 of the contract's names are found (the ones a face pictu
 Animals, most cartoons and back-of-head scans have no face the detector knows: the command
 says so (exit code 2) and writes nothing; give their landmarks by hand (--from, MeshLab .pp), or
 place five (the outer eye corners, the nose tip, the mouth corners) and let --assist propose the
-rest: the generic head is fitted to the mesh through them and its own landmarks read off it
+rest: the generic head is fitted to the mesh through them and its landmarks read off it
 ("confidence" then falls with the distance from the placed names and where the fit meets the
-surface poorly).
-Needs the optional detector: pip install 'autobones[landmarks]'.
+surface poorly; check the proposals, they are a start, not a measurement).
+Finding them automatically needs the optional detector: pip install 'autobones[landmarks]'.
 
 --edit: a page on 127.0.0.1 (the first line printed is its URL; --no-browser opens none, --port 0
 picks a free port). Click the head to place the selected name, drag a point to move it, Ctrl+Z /

@@ -244,3 +244,9 @@ def test_on_profile_puts_menton_at_the_lowest_midline_point_near_it():
     assert any(np.allclose(out["menton"], p) for p in midline_profile(V, F, normal, offset))
     assert np.linalg.norm(out["menton"] - truth["menton"]) < 0.05 * unit      # measured 0.008
     assert out["pronasale"] is start["pronasale"]
+
+
+def test_cli_rig_without_assist_is_refused(tmp_path):
+    r = _run(["landmarks", str(data("menpo3d/james.obj")), "--rig", "some_rig", "-o", "out.json"], tmp_path)
+    assert r.returncode == 2 and "give --assist PARTIAL too" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out.json").exists()

@@ -8,10 +8,16 @@ corners; everything else is read off the generic head fitted to the mesh:
    same dense fit ``transfer`` uses, the generic's jaw opened as far as the given mouth corners
    say), then stuck to it (:func:`autobones.rig_transfer.stick.stick`): every generic vertex
    gets its point on the head;
-2. each of the generic rig's own landmarks sits at barycentric coordinates in a triangle of
-   its skin; the same coordinates in the fitted triangle, snapped to the head's surface, are
-   the proposal (:func:`read_off`);
-3. a confidence per name (:func:`confidence`) from how well the fit meets the head there and
+2. each name is read off the generic skin: a point of it sits at barycentric coordinates in a
+   triangle of the skin; the same coordinates in the fitted triangle, snapped to the head's
+   surface, are the proposal (:func:`read_off`). The point is the generic rig's own landmark,
+   or for the built-in rig where hand-placed landmarks of human heads land on its fitted skin
+   (:mod:`autobones.landmarks.assist_calibration`: the generic's landmarks follow geometric
+   rules on a procedural head, not the way people place the names);
+3. on a human-proportioned face (:func:`face_distance` of the five to the generic's) the menton
+   is moved to the lowest point of the midline profile near it
+   (:func:`autobones.landmarks.refine.on_profile`): the fitted chin is not the head's;
+4. a confidence per name (:func:`confidence`) from how well the fit meets the head there and
    how far the name lies from the given points.
 
 Works on any head the five names can be placed on (animals, cartoons, bodies: the fit is
@@ -258,7 +264,7 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None):
         found, c = _read_names(fit, V, F, [reading[n] for n in wanted], given, unit)
         points.update(zip(wanted, found))
         conf.update(zip(wanted, map(float, c)))
-    human = face_distance(given, generic.landmarks) <= HUMAN_FACE
+    human = all(n in generic.landmarks for n in REQUIRED) and face_distance(given, generic.landmarks) <= HUMAN_FACE
     if human and "menton" in points and "menton" not in given:
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
