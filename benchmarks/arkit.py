@@ -61,6 +61,7 @@ sys.path.insert(0, ROOT)
 from autobones.arkit.copy_baseline import copy_displacements  # noqa: E402
 from autobones.geometry.rotations import similarity  # noqa: E402
 from autobones.arkit.folds import unfold_shapes  # noqa: E402
+from autobones.arkit.lid_meet import meet_lids  # noqa: E402
 from autobones.arkit.lids import eye_sides, gap_closure  # noqa: E402
 from autobones.arkit.names import ict_names  # noqa: E402
 from autobones.arkit.shapes import load_shapes  # noqa: E402
@@ -122,7 +123,7 @@ def remeshed_identity(Vi, F, part, lm, do_remesh=True, one_surface=False):
     return Vt, Ft, lm_t, tf, tb
 
 
-def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surface=False, close_lids=True):
+def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surface=False, close_lids=True, meet=True):
     Vi = neutral + z[f"identity/identity{k:03d}"].astype(np.float64)
     # landmarks: ICT's neutral landmarks at their barycentric place on the identity
     lf, lb = carry(np.array(list(lm_neutral.values())), neutral, F, part)
@@ -142,9 +143,11 @@ def run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=True, one_surf
     frame = frame_from_landmarks(Vt, Ft, lm_t)  # as transfer --arkit: the lip line is looked for on every head
     X = deformation_targets(S, D, P, Vt, Ft, lm_t, frame if one_surface else None, timings=timings,
                             close_lids=close_lids, frame=frame)
+    if meet:  # the blinks' lid margins brought together, as arkit_targets does (no eyeballs given here)
+        X = np.stack([v for v in meet_lids(Vt, Ft, lm_t, dict(zip(names, X)))[0].values()])
     t_dt = time.perf_counter() - t0
     t0 = time.perf_counter()
-    X0 = X  # as transfer --arkit makes them (the repair is opt-in); X: with the fold repair
+    X0 = X  # before the fold repair; X: with it (arkit_targets repairs)
     X, folds = unfold_shapes(Vt, Ft, X0, names)
     t_fold = time.perf_counter() - t0
     shared = [n for n in S.landmarks if n in lm_t]
@@ -171,6 +174,8 @@ def main(argv=None):
     ap.add_argument("--one-surface", action="store_true",
                     help="keep only each head's skin and take it as a one-surface scan (eye surface free, lids closed)")
     ap.add_argument("--no-lids", action="store_true", help="with --one-surface: only set the eye surface free")
+    ap.add_argument("--no-meet", action="store_true",
+                    help="the blinks as the transfer carries them, their lid margins not brought together")
     ap.add_argument("--json", help="also write the numbers here")
     ap.add_argument("--time", action="store_true",
                     help="what the 52 shapes add to transfer on a 27k-vertex head, and arkit_targets' stages")
@@ -195,7 +200,7 @@ def main(argv=None):
     results = []
     for k in args.identities:
         r = run_identity(k, S, z, neutral, F, part, lm_neutral, do_remesh=not args.no_remesh,
-                         one_surface=args.one_surface, close_lids=not args.no_lids)
+                         one_surface=args.one_surface, close_lids=not args.no_lids, meet=not args.no_meet)
         results.append(r)
         A = np.array(list(r["rows"].values()))
         print(f"identity{k:03d}: {r['vertices']} vertices, {r['triangles']} triangles; correspondence "
@@ -220,14 +225,15 @@ def main(argv=None):
     print("| worst shape (mean over identities) | " + " | ".join(f"{per[:, c].min():.1%}" for c in range(4)) + " |")
     print("| worst shape on any identity | " + " | ".join(f"{M[:, :, c].min():.1%}" for c in range(4)) + " |")
     print()
-    print("Lid gap closed by eyeBlinkLeft / eyeBlinkRight (nearest vertices / landmark points / vertical):")
+    print("Lid gap closed by eyeBlinkLeft / eyeBlinkRight (nearest vertices / landmark points / vertical / "
+          "upper margin to the lower):")
     print()
     print("| head | side | truth | DT | copy |")
     print("|---|---|---|---|---|")
     for r in results:
         for side, c in r["lids"].items():
             print(f"| identity{r['identity']:03d} | {side} | " + " | ".join(
-                " / ".join(f"{c[m][w]:.0%}" for w in ("vertices", "points", "vertical")) for m in ("truth", "DT", "copy"))
+                " / ".join(f"{c[m][w]:.0%}" for w in ("vertices", "points", "vertical", "margins")) for m in ("truth", "DT", "copy"))
                 + " |")
     print(f"\nwith the fold repair: {repaired}; without: DT skin {M[:, :, 0].mean():.1%} / worst "
           f"{per[:, 0].min():.1%}, DT all {M[:, :, 2].mean():.1%}; repair time median "

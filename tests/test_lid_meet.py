@@ -5,7 +5,7 @@ import pytest
 
 import autobones
 from autobones.arkit.folds import folded_triangles, unfold_shapes
-from autobones.arkit.lid_meet import lid_region, meet_lids
+from autobones.arkit.lid_meet import lid_region, lids_note, meet_lids
 from autobones.arkit.lids import canthal_parameter, gap_closure, margin_points
 from autobones.arkit.targets import arkit_targets, eyeball_vertices
 from autobones.rig_transfer.eyes import fit_sphere
@@ -36,7 +36,7 @@ def test_a_flat_eye_closes_and_only_its_upper_lid_moves():
     c = gap_closure(V, F, D, lm, "l", up=[0.0, 1.0, 0.0])
     # measured 0.95 (the default meet) at the landmark; 0.949 median over the margin samples
     assert c["margins"] > 0.93 and c["vertical"] > 0.93, c
-    assert left["eyeBlinkLeft"] < 0.07
+    assert left["eyeBlinkLeft"]["open"] < 0.07 and left["eyeBlinkLeft"]["one_triangle"] < 0.1  # the corner sample: 1 of 24
     # the upper margin comes down, not the lower one up: the lower lid and everything outside the
     # eye's region is where it was
     t = canthal_parameter(V, lm, "l")
@@ -88,6 +88,18 @@ def test_james_blinks_close_both_eyes(james):
         assert c["margins"] > 0.9, (side, c)
     assert sum(rig.arkit["folds"]["after_repair"].values()) == 0
     assert set(rig.arkit["lids_meet"]) == {"eyeBlinkLeft", "eyeBlinkRight"}
+    assert all(r["open"] < 0.1 for r in rig.arkit["lids_meet"].values()) and "lids_note" not in rig.arkit
+
+
+def test_an_eye_one_triangle_high_is_reported_not_hidden():
+    # the flat eye's grid coarsened until one row of triangles spans the opening: the margins cannot part
+    V, F, lm = _flat_eye(n=5)
+    zero = np.zeros_like(V)
+    _, report = meet_lids(V, F, lm, {"eyeBlinkLeft": zero})
+    r = report["eyeBlinkLeft"]
+    assert r["one_triangle"] >= 0.5 and r["open"] > 0.1, r
+    note = lids_note(report)
+    assert "eyeBlinkLeft" in note and "one triangle high" in note
 
 
 def test_an_ict_identity_blinks_closed_over_its_eyeballs():

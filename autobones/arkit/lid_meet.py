@@ -38,6 +38,19 @@ from ..geometry.topology import mesh_edges
 from .lids import canthal_parameter, eye_sides, margin_curves, skin_faces
 
 BLINKS = {"eyeBlinkLeft": "l", "eyeBlinkRight": "r"}  # ARKit's Left is the subject's own left
+BLINK_CLOSED = 0.9  # a blink closes at least this fraction of the gap (issue #34), else the sidecar says why
+
+
+def lids_note(apart):
+    """One line for the sidecar and the log: the blinks of ``apart`` (name -> :func:`meet_lids`'s
+    report) whose margins stay more than ``1 - BLINK_CLOSED`` of the gap apart, and why."""
+    parts = []
+    for name, r in apart.items():
+        why = (f"the eye opening is one triangle high at {r['one_triangle']:.0%} of the lid (no vertex between "
+               "the margins to part them; more vertices across the eye close more)") if r["one_triangle"] >= 0.5 else \
+            "the move that closes them was held back (eyeball or folds)"
+        parts.append(f"{name} leaves its lid margins {r['open']:.0%} of the open gap apart: {why}")
+    return "; ".join(parts)
 
 
 def _smooth_fall(x):
@@ -149,9 +162,11 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
     -------
     targets : dict str -> (n, 3) float64
         The same dict's entries, the blinks replaced.
-    open : dict str -> float
-        Per blink changed, the median fraction of the rest gap its margins still leave open at
-        the samples (0: touching).
+    report : dict str -> dict
+        Per blink changed: ``open``, the median fraction of the rest gap its margins still leave
+        open at the samples (0: touching); ``one_triangle``, the fraction of the samples where the
+        upper and lower margin points lie on triangles that share a vertex (an opening one
+        triangle high, which moving vertices cannot close: demosthenes' carved eyes, all 24).
     """
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
     out, report = dict(targets), {}
@@ -184,5 +199,9 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
         c = _meeting_move(V, F, free, G, -meet * (gap0 + G @ D), curtain=(free, share, Ru[above]))
         D[free] = _off_eyeballs(V[free] + D[free] + c, V[free], eyeballs) - V[free]
         out[name] = D
-        report[name] = float(np.median(np.linalg.norm(gap0 + G @ D, axis=1) / np.maximum(np.linalg.norm(gap0, axis=1), 1e-300)))
+        left = np.linalg.norm(gap0 + G @ D, axis=1) / np.maximum(np.linalg.norm(gap0, axis=1), 1e-300)
+        # where the two margin points lie on triangles sharing a vertex, the opening is one
+        # triangle high: no move of the vertices parts one margin from the other
+        shared = np.asarray((abs(Su).astype(bool).multiply(abs(Sl).astype(bool))).sum(axis=1)).ravel() > 0
+        report[name] = {"open": round(float(np.median(left)), 4), "one_triangle": round(float(shared.mean()), 4)}
     return out, report

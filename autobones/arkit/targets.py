@@ -33,7 +33,7 @@ from .copy_baseline import copy_displacements
 from .deformation_transfer import DeformationTransfer
 from .folds import ON_TOP, folded_triangles, unfold_shapes
 from ..rig_transfer.eyes import fit_sphere
-from .lid_meet import meet_lids
+from .lid_meet import BLINK_CLOSED, lids_note, meet_lids
 from .lids import LidClosure, eye_sides, margin_points
 from .names import ARKIT_NAMES, EYE_LOOK
 from .shapes import MIN_LANDMARKS, flipped_triangles, load_shapes
@@ -349,13 +349,16 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     else:
         raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
     names = list(names)
-    met = {}
+    met, apart = {}, {}
     if method == "deformation" and meet_blinks:
         # the blinks' margins brought together on the head's own lids (the gradients leave them apart)
         t = time.perf_counter()
         balls = [fit_sphere(V[m]) for m in eyes.values()]
         blinks, met = meet_lids(V, F, lm, dict(zip(names, X)), eyeballs=balls)
         X = np.stack([blinks[n] for n in names])
+        apart = {n: r for n, r in met.items() if r["open"] > 1.0 - BLINK_CLOSED}
+        if apart:
+            log.warning("ARKit shapes: %s", lids_note(apart))
         tim["lids"] = tim.get("lids", 0.0) + time.perf_counter() - t
     # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose
     # on top of jawOpen); rounded first to the float32 the glb stores, so the counts are of what is written
@@ -410,7 +413,8 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         "landmarks_used": shared,
         "absent": [n for n in ARKIT_NAMES if n not in S.deltas],
         # per blink the lids were closed on: the fraction of the rest gap its margins leave open
-        "lids_meet": {n: round(v, 4) for n, v in met.items()},
+        "lids_meet": met,
+        **({"lids_note": lids_note(apart)} if apart else {}),
         "eyes": ("eyeLook* turn the separate eyeballs about " + ", ".join(sorted(eyes)) + " by "
                  + ", ".join(f"{k.lower()} {v:g} deg" for k, v in EYE_TURN_DEG.items())) if eyes else
                 "no separate eyeballs: eyeLook* move the lids and eye surface as the skin transfer gives",
