@@ -55,8 +55,9 @@ def decimate(V, F, keep=0.5):
 
 
 def head(variant, z, N0, F, part, ak, ict):
-    """(V, F, landmarks, sample): the variant's mesh and landmarks, and ``sample(D)`` -> D at its vertices
-    (D an ICT displacement (N, 3)), ``skin`` (bool per vertex)."""
+    """(V, F, landmarks, sample, skin): the variant's mesh and landmarks, ``sample(D)`` -> an ICT displacement
+    D (N, 3) at its vertices (interpolated at their closest ICT points when remeshed or decimated), and
+    ``skin`` (bool per vertex: on ICT's largest part)."""
     name, _, how = variant.partition(" ")
     Vi = N0 + z[f"identity/{name}"].astype(np.float64)
     skin_label = np.argmax(np.bincount(part))
