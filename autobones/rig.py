@@ -227,7 +227,7 @@ class Rig:
         return cached
 
     def pose(self, au=None, expression=None, muscles=None, jaw_deg=0.0, eyelids=None, gaze=None, look_at=None,
-             head_deg=None, neck_deg=None, arkit=None, tissue=False):
+             head_deg=None, neck_deg=None, arkit=None, tissue=False, layer="auto"):
         """Posed vertices (n, 3), input frame and units: FACS action units (``au={12: 0.8}``,
         ``"12L"`` for one side), an emotion (``expression="happiness"``), muscle contractions,
         jaw opening in degrees, eyelids, eye gaze and head/neck rotations; see
@@ -238,6 +238,15 @@ class Rig:
         glTF player gives (rest + sum of weight x target); mixed with AUs, the jaw or head/eye
         turns, both act and nothing wins (an AU jaw opening plus ``jawOpen`` opens twice; glTF
         players would also turn the targets with the bones).
+
+        ``layer``: what poses the AUs the definitions' ``au_arkit`` table maps (AU12 -> mouthSmile,
+        AU26/27 -> jawOpen, ...; emotions expand to their AUs first). ``"shapes"``: the head's own ARKit
+        shapes (:mod:`autobones.expressions.au_shapes`: each mapped shape at the AU's intensity, ``"12L"``
+        only the subject's left shape, AUs sharing a shape take the largest, not the sum; added unturned
+        by head/neck and without the tissue pass); AutobonesError on a rig without ARKit shapes.
+        ``"muscles"``: the muscle model, exactly as before the layer existed. ``"auto"`` (default):
+        shapes where the rig has them, else muscles. Unmapped AUs, muscles, jaw, eyelids, gaze,
+        head/neck and tissue always use the muscle model.
 
         ``tissue=True``: the skin refined by the layered soft tissue's equilibrium (Lee,
         Terzopoulos & Waters 1995; :mod:`autobones.expressions.tissue`): skin over shortening
@@ -260,7 +269,17 @@ class Rig:
         ...
         autobones.errors.AutobonesError: unknown expression 'hapiness'; known: surprise, fear, happiness, sadness, disgust, anger
         """
+        from .expressions import au_shapes
+
         offset = self.arkit_offset(arkit)
+        if au_shapes.resolve_layer(layer, bool(self.arkit_targets)) == "shapes" and (au or expression):
+            doc = self._expression_definitions()
+            weights, rest = au_shapes.split_mix(au_shapes.au_mix(au, expression, doc["expressions"]),
+                                                au_shapes.table_of(doc), self.arkit_targets)
+            au, expression = rest or None, None
+            if weights:
+                shapes = au_shapes.shape_displacement(weights, self.arkit_targets, len(self.vertices))
+                offset = shapes if offset is None else offset + shapes
         only_arkit = (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
                       and gaze is None and look_at is None and head_deg is None and neck_deg is None)
         if offset is not None and only_arkit:  # no model needed (a rig without muscles poses too)
@@ -270,6 +289,13 @@ class Rig:
                                                 eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
                                                 neck_deg=neck_deg, tissue=tissue)
         return base if offset is None else base + offset
+
+    def _expression_definitions(self):
+        """The definitions ``pose`` uses: the built model's, else the sidecar's, else the packaged ones."""
+        from .expressions.definitions import load_expressions
+
+        model = self.__dict__.get("_expression_model")
+        return model.doc_ if model is not None else load_expressions((self.expressions or {}).get("definitions"))
 
     def arkit_offset(self, weights):
         """Sum of ``weight * target`` (n, 3) of the ARKit shapes ``weights`` (dict name -> float),

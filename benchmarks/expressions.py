@@ -11,6 +11,9 @@ Run by hand, not by the tests::
     python benchmarks/expressions.py --part ict57 --refine 0   # ICT's AU shapes, remeshed transfer (~20 min)
     python benchmarks/expressions.py --part ict57 --shapes jawOpen eyeBlink_L --identities identity003
     python benchmarks/expressions.py --part ceiling   # what any contractions of the fields could explain (~8 min)
+    python benchmarks/expressions.py --part au-shapes # AUs through the head's ARKit shapes vs muscles (~5 min)
+
+Part "au-shapes" (issue #34 item 2; not run by "all"): benchmarks/au_shapes.py, see its docstring.
 
 Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
 landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
@@ -767,11 +770,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
     ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
-    ap.add_argument("--part", choices=["all", "rig", "bones", "ict57", "ceiling"], default="all",
+    ap.add_argument("--part", choices=["all", "rig", "bones", "ict57", "ceiling", "au-shapes"], default="all",
                     help="rig: the full-rig fit and transfer (parts 1, 2) only; bones: bones alone (part 3) only; "
                          "ict57: every ICT shape the AU <-> ARKit table maps, transferred to remeshed identities "
                          "(not part of 'all'); ceiling: what any contractions of the muscle fields could explain "
-                         "of those shapes on identity002 (not part of 'all')")
+                         "of those shapes on identity002 (not part of 'all'); au-shapes: every mapped AU and the "
+                         "six emotions through the head's ARKit shapes against the muscles, on held-out ICT "
+                         "identities (benchmarks/au_shapes.py; not part of 'all')")
+    ap.add_argument("--variants", nargs="+", help="au-shapes: only these heads (identity001, 'identity000 remeshed', ...)")
     ap.add_argument("--identities", nargs="+", default=["identity000", "identity001"],
                     help="ict57: the ICT identities the fit is transferred to (remeshed)")
     ap.add_argument("--shapes", nargs="+", help="ict57: only these ICT shapes (default: every mapped one)")
@@ -781,6 +787,11 @@ def main():
     sweeps = 0 if args.quick else args.sweeps
     if args.part == "ceiling":
         ceiling_benchmark(shapes=args.shapes)
+        return
+    if args.part == "au-shapes":
+        import au_shapes
+
+        au_shapes.au_shapes_benchmark(ICT, machine, **({"variants": args.variants} if args.variants else {}))
         return
     if args.part == "ict57":
         ict57_benchmark(targets=tuple(args.identities), refine=args.refine, shapes=args.shapes)

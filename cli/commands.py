@@ -108,6 +108,7 @@ def cmd_pose(args):
 
     import autobones
     from autobones.errors import AutobonesError
+    from autobones.expressions.au_shapes import resolve_layer
     from autobones.expressions.definitions import load_expressions, parse_au_key
     from autobones.io.posed import FORMATS, write_posed_mesh
 
@@ -132,8 +133,9 @@ def cmd_pose(args):
     if not rig.muscles and not (arkit and rig.arkit_targets):
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
                              "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
+    layer = resolve_layer(args.layer, bool(rig.arkit_targets))  # --layer shapes on a rig without: refused here
     # names checked before the skin/muscle model is built (seconds on a large head): a typo costs nothing
-    check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit)
+    check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit, shapes=layer == "shapes")
     if definitions is not None or au or expression or muscles or eyelids or jaw or gaze or look_at or head_deg \
             or neck_deg or args.tissue:
         with progress(args, "building the skin/muscle model"):
@@ -142,14 +144,15 @@ def cmd_pose(args):
     with progress(args, "posing"):
         V = rig.pose(au=au or None, expression=expression or None, muscles=muscles or None, jaw_deg=jaw,
                      eyelids=eyelids or None, gaze=gaze, look_at=look_at, head_deg=head_deg, neck_deg=neck_deg,
-                     arkit=arkit or None, tissue=args.tissue)
+                     arkit=arkit or None, tissue=args.tissue, layer=layer)
     watch.lap("pose")
     what = ", ".join([f"{k} {v:g}" for k, v in expression.items()] + [f"AU{k} {v:g}" for k, v in au.items()]
                      + [f"{k} {v:g}" for k, v in muscles.items()] + ([f"jaw {jaw:g} deg"] if jaw else [])
                      + [f"eyelids {k} {v:g}" for k, v in eyelids.items()]
                      + ([f"gaze {args.gaze}"] if gaze else []) + ([f"look at {args.look_at}"] if look_at else [])
                      + ([f"head {args.head_deg}"] if head_deg else []) + ([f"neck {args.neck_deg}"] if neck_deg else [])
-                     + [f"{k} {v:g}" for k, v in arkit.items()] + (["tissue"] if args.tissue else []))
+                     + [f"{k} {v:g}" for k, v in arkit.items()] + (["tissue"] if args.tissue else [])
+                     + (["mapped AUs through the ARKit shapes"] if layer == "shapes" and (au or expression) else []))
     write_posed_mesh(out, V, rig.faces, comment=f"autobones pose {os.path.basename(args.rig)}: {what or 'neutral'}")
     watch.lap("write")
     moved = float(np.linalg.norm(V - rig.vertices, axis=1).max()) if len(V) else 0.0

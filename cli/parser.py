@@ -144,6 +144,13 @@ def add_pose(sub):
     q.add_argument("--arkit", action="append", default=[], metavar="NAME=W",
                    help="an ARKit shape (jawOpen, eyeBlinkLeft, ...) at weight W (default 1), on a rig made with "
                         "transfer --arkit; repeat to mix; adds on top of AUs and bones")
+    q.add_argument("--layer", choices=["auto", "shapes", "muscles"], default="auto",
+                   help="what poses the AUs the au_arkit table maps (AU12 -> mouthSmile, AU26 -> jawOpen, ...; "
+                        "--expression expands to its AUs): shapes = the head's own ARKit shapes (a rig made with "
+                        "transfer --arkit), muscles = the skin/muscle model, auto (default) = shapes where the rig "
+                        "has them, else muscles. Other AUs, --muscle, --jaw, --eyelids, gaze, head, neck and "
+                        "--tissue always use the muscle model. An option of its own, not a reuse of --muscle, "
+                        "which already names muscle contractions")
     q.add_argument("--tissue", action="store_true",
                    help="refine the pose by the layered soft tissue under the skin (Lee, Terzopoulos & Waters "
                         "1995): skin over a shortening muscle bulges (the cheek in a smile), the tissue keeps its "

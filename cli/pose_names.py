@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 
-def check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit):
+def check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit, shapes=False):
     """AutobonesError for the first unknown expression, action unit, muscle, eyelid or ARKit name.
 
     ``definitions`` is the dict pose will use (None: the rig's sidecar's, else the built-in ones).
+    ``shapes``: the AUs go through the rig's ARKit shapes, so the AUs the ``au_arkit`` table maps are
+    known too (AU16, AU45 have no muscle definition).
     The messages are the model's own, so a name is refused the same way before or after the build.
     """
     from autobones.errors import AutobonesError
@@ -19,6 +21,10 @@ def check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit):
         if name not in known:
             raise AutobonesError(f"unknown expression {name!r}; known: {', '.join(known)}")
     units = doc["action_units"]
+    if shapes:
+        from autobones.expressions.au_shapes import mapped_aus, table_of
+
+        units = {**dict.fromkeys(mapped_aus(table_of(doc))), **units}
     for key in au:
         base = parse_au_key(key)[1]
         if base not in units:

@@ -7,6 +7,10 @@ targets, Blender shape keys). The targets are exact at weights 0 and 1 one at a 
 or a weight between, is their linear blend, whereas the model itself is not linear in every
 part (the skull clamp, and the jaw and eyelid rotations): ``Rig.pose`` / ``autobones pose``
 recompute any mix exactly from the muscle parameters the sidecar keeps.
+
+The targets are the muscle layer's, also on a rig with ARKit shapes, where ``Rig.pose`` drives the AUs
+the ``au_arkit`` table maps through those shapes (:mod:`.au_shapes`): such a rig's glb carries the ARKit
+shapes as targets of their own, so an engine reaches the shape layer by weighting them.
 """
 from __future__ import annotations
 
