@@ -12,8 +12,11 @@ Run by hand, not by the tests::
     python benchmarks/expressions.py --part ict57 --shapes jawOpen eyeBlink_L --identities identity003
     python benchmarks/expressions.py --part ceiling   # what any contractions of the fields could explain (~8 min)
     python benchmarks/expressions.py --part au-shapes # AUs through the head's ARKit shapes vs muscles (~5 min)
+    python benchmarks/expressions.py --captures NEUTRAL.obj A.obj B.obj --landmarks L.json   # your own captures
 
 Part "au-shapes" (issue #34 item 2; not run by "all"): benchmarks/au_shapes.py, see its docstring.
+``--captures`` (issue #34 item 4): the rest of the command line goes to benchmarks/captures.py, which
+scores a rig on any neutral and its expressions (ARKit and AU targets' explained fraction, presets).
 
 Parts 1 and 2 (``full_rig_benchmark``): identity002 rigged by ``transfer`` with its
 landmarks, ``ExpressionModel`` fitted to each expression (``fit_rig``: grid over
@@ -113,6 +116,7 @@ import datetime
 import json
 import platform
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -767,6 +771,10 @@ def ceiling_benchmark(source="identity002", shapes=None):
 
 
 def main():
+    if "--captures" in sys.argv[1:]:  # everything after it is captures.py's command line
+        import captures
+
+        return captures.main(sys.argv[sys.argv.index("--captures") + 1:])
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sparse and dense only, no rigid variant")
     ap.add_argument("--sweeps", type=int, default=30, help="rigid variant: block-descent sweeps (0: skip it)")
@@ -926,4 +934,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
