@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from ..errors import AutobonesError
+from ..errors import AutobonesError, counted
 
 
 def rigid_align(V, V_rest, keep=0.5, iterations=5):
@@ -66,7 +66,7 @@ def explain(displacement, targets, mask=None, bounds=(0.0, 1.0)):
                              + (f"the target {bad[0]} {np.shape(targets[bad[0]])}" if bad else "not (n, 3)"))
     m = np.ones(len(d), dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     if m.shape != (len(d),):
-        raise AutobonesError(f"explain: a mask of {m.shape} for {len(d)} vertices")
+        raise AutobonesError(f"explain: a mask of {m.shape} for {counted(len(d), 'vertex', 'vertices')}")
     A = np.stack([np.asarray(targets[n], dtype=np.float64)[m].ravel() for n in names], axis=1)
     b = d[m].ravel()
     norm = float(np.linalg.norm(b))
