@@ -54,6 +54,14 @@ def test_a_flat_eye_closes_and_only_its_upper_lid_moves():
     assert gap_closure(V, F, X[0], lm, "l")["margins"] > 0.9
 
 
+def test_landmarks_away_from_the_skin_leave_the_blink_as_it_is():
+    V, F, lm = _flat_eye()
+    far = {k: v + np.array([50.0, 0.0, 0.0]) for k, v in lm.items()}
+    D = np.full_like(V, 0.01)
+    out, report = meet_lids(V, F, far, {"eyeBlinkLeft": D})
+    assert out["eyeBlinkLeft"] is D and report == {}
+
+
 def test_lids_slide_over_an_eyeball_never_into_it():
     V, F, lm = _flat_eye()
     # an eyeball just behind the surface, reaching up to it under the eye: the upper lid's move

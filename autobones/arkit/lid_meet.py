@@ -176,6 +176,8 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
         if name not in targets or side not in sides:
             continue
         idx, Ru, Rl = lid_region(V, F, landmarks, side)
+        if not len(idx):  # no skin near the eye's landmarks: nothing to close
+            continue
         D = np.array(targets[name], dtype=np.float64)
         # the vertices above the lower margin as the shape leaves them move; the lower lid stays
         U, L = Ru @ (V + D), Rl @ (V + D)
