@@ -55,8 +55,9 @@ render (rasterise + shade + surface points), 2-D (the detector on the pictures),
 refine, and other (lift, combine, snap). Target: <= 3 s for a 30k-vertex head on
 this 2-core machine. No timing is asserted.
 
-``--assist [--variants as-is,rot1,x1000,dec5k] [--heads A,B]`` (issue #35): assisted landmarks, five
-names given from each landmarked head's file and the rest proposed (:mod:`landmarks_assist`).
+``--assist [--variants as-is,rot1,x1000,dec5k] [--heads A,B] [--detected]`` (issue #35): assisted landmarks,
+five names given from each landmarked head's file and the rest proposed (:mod:`landmarks_assist`);
+``--detected``: on a human face the detector's names replace the fit's, as ``landmarks --assist`` does.
 ``--refit [--variants ...]`` (issue #35 part 3): the detected landmarks of the human heads against the
 generic head's fit from them, read off with a calibration held out by source family (measured; not shipped).
 
@@ -368,6 +369,8 @@ def main(argv=None):
     ap.add_argument("--heads", help="with --assist: comma-separated head names (default: all)")
     ap.add_argument("--reading", default="held-out", choices=("held-out", "shipped", "own"),
                     help="with --assist: where names are read off the generic (see landmarks_assist.py)")
+    ap.add_argument("--detected", action="store_true",
+                    help="with --assist: as `landmarks --assist` does, the detector's names on a human face")
     ap.add_argument("--refit", action="store_true", help="issue #35 part 3: detected landmarks vs the generic's "
                                                          "fit from them, on the human heads (with --variants)")
     args = ap.parse_args(argv)
@@ -383,7 +386,7 @@ def main(argv=None):
 
         t0 = time.perf_counter()
         landmarks_assist.run(tuple(args.variants.split(",")), args.heads.split(",") if args.heads else None,
-                             args.reading)
+                             args.reading, detected="auto" if args.detected else None)
         print(f"\ntotal wall time {time.perf_counter() - t0:.0f} s")
         return 0
     if args.time_worker:

@@ -80,7 +80,7 @@ def held_out_readings(samples):
             for f in fams}
 
 
-def score(name, V, F, truth, variant, reading=None):
+def score(name, V, F, truth, variant, reading=None, detected=None):
     """(errors {name: % ex-ex}, confidences, seconds, omitted) of one head copy, or a string why not."""
     var = zc.make_variant(variant, V, F, truth, zlib.crc32(name.encode()))
     if var is None:
@@ -88,7 +88,7 @@ def score(name, V, F, truth, variant, reading=None):
     given = {n: var.lm[n] for n in REQUIRED}
     t0 = time.perf_counter()
     try:
-        out = assist_landmarks(var.V, var.F, given, reading=reading)
+        out = assist_landmarks(var.V, var.F, given, reading=reading, detected=detected)
     except AutobonesError as exc:
         return f"refused: {exc}"
     secs = time.perf_counter() - t0
@@ -98,7 +98,7 @@ def score(name, V, F, truth, variant, reading=None):
     return err, {n: out.confidence[n] for n in err}, secs, dict(out.omitted)
 
 
-def run(variants=("as-is",), heads=None, reading="held-out"):
+def run(variants=("as-is",), heads=None, reading="held-out", detected=None):
     """Print the per-head and pooled tables (markdown) for ``variants``; ``reading``: where the names are
     read off the generic skin: ``own`` (the generic's landmarks), ``shipped`` (the built-in calibration,
     made from these human heads: in-sample for them) or ``held-out`` (calibrated on the human heads of the
@@ -121,7 +121,7 @@ def run(variants=("as-is",), heads=None, reading="held-out"):
         V, F = load_mesh(mesh)
         use = readings[family(mesh)] if readings is not None else own if reading == "own" else None
         for v in variants:
-            r = score(h, V, F, truth, v, use)
+            r = score(h, V, F, truth, v, use, detected)
             if isinstance(r, str):
                 print(f"  {h} {v}: {r}", file=sys.stderr, flush=True)
                 continue

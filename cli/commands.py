@@ -192,7 +192,8 @@ def cmd_landmarks(args):
 
         given = validate_landmarks(read_landmarks(args.assist), V, F, min_count=1, source=args.assist)
         with progress(args, "fitting the generic head"):
-            found = assist_landmarks(V, F, given, rig=args.rig)
+            # on a human face the detector's names replace the fit's where it finds them
+            found = assist_landmarks(V, F, given, rig=args.rig, detected="auto")
         lm, frame, confidence = found.points, found.frame, found.confidence
         proposed = [n for n in lm if n not in given]
         how = (f"from {args.assist} ({len(given)} given), {len(proposed)} proposed, mean confidence "
