@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 import bad_inputs
 from autobones.batch import (REPORT_NAME, find_meshes, make_options, options_hash, plan, rig_one, run_batch,
                              run_local, summary_table)
+from autobones.batch.jobs import partial_dir
 from autobones.errors import AutobonesError
 from shared_data import ROOT, data
 
@@ -158,6 +159,12 @@ def test_thirty_meshes_ten_percent_bad_then_rerun_skips(heads30, tmp_path):
     assert outputs(out) == snapshot
 
 
+def _finished(out):
+    """Sidecars in ``out`` whose head's write is over (no ``.partial`` folder left beside its glb)."""
+    return [j for j in out.rglob("*.rig.json")
+            if not os.path.isdir(partial_dir(j.with_name(j.name[: -len(".json")] + ".glb")))]
+
+
 def test_kill_9_then_rerun_is_byte_identical_to_a_clean_run(small_heads, tmp_path):
     heads, clean = small_heads
     out = tmp_path / "rigs"
@@ -166,8 +173,10 @@ def test_kill_9_then_rerun_is_byte_identical_to_a_clean_run(small_heads, tmp_pat
     proc = subprocess.Popen(CLI + ["batch", str(heads), "-o", str(out), "--density", "sparse", "--jobs", "1"],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
-        # until the first rig is complete, or the batch ended on its own (then the assertion below says so)
-        while not list(out.rglob("*.rig.json")) and proc.poll() is None:
+        # until the first rig is complete (its sidecar renamed in last, then its .partial folder removed:
+        # killed between the two, the rerun rigs it again, rightly, and skips nothing), or the batch ended
+        # on its own (then the assertion below says so)
+        while not _finished(out) and proc.poll() is None:
             time.sleep(0.02)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)  # the CLI and its workers
