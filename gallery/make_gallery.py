@@ -36,8 +36,9 @@ closed and opened 20 degrees by linear blend skinning: no torn flap.
 and the james scan), neutral first, all from the front at one scale, in three rows: posed by
 :class:`autobones.expressions.ExpressionModel` (the wire-deformer rig of Bibliowicz 2005), the
 same with the layered tissue pass (``pose(tissue=True)``, Lee, Terzopoulos & Waters 1995), and
-ICT-FaceKit's own ARKit shapes carried onto the head (``transfer(..., arkit=True)``) weighted by
-each emotion's AUs through the ``au_arkit`` table (AU23 and AU25 of anger have no ARKit shape);
+``pose``'s shapes layer (``pose(expression=..., layer="shapes")`` on a rig made with ``arkit=True``:
+each emotion's AUs drive ICT-FaceKit's ARKit shapes carried onto the head through the ``au_arkit``
+table; anger's AU23 and AU25 have no ARKit shape and are posed by the muscles on top);
 the skin is tinted orange by how far each vertex moved (relative to the largest motion in the
 picture).
 
@@ -178,29 +179,13 @@ def landmark_picture(name, out):
     print(f"{path}: {len(lm)} landmarks{extra}")
 
 
-def emotion_arkit_weights(model, emotion):
-    """ARKit shape weights (name -> 0..1) standing for an emotion prototype: each of its AUs'
-    intensity on the shapes the definitions' ``au_arkit`` table pairs with that AU; and the AUs
-    the table has no shape for."""
-    from autobones.expressions.definitions import au_arkit_table
-
-    table = {a: row["arkit"] for row in au_arkit_table(model.doc_) for a in row["au"]}
-    weights, unmapped = {}, []
-    for au, v in model.expressions[emotion]["au"].items():
-        names = table.get(int(str(au).rstrip("LR")))
-        if names is None:
-            unmapped.append(f"AU{au}")
-            continue
-        for n in names:
-            weights[n] = min(1.0, weights.get(n, 0.0) + float(v))
-    return weights, unmapped
-
-
 def expression_picture(name, out, size=420):
     """``expressions_<name>.png``: neutral and the six emotions side by side, front view, in three
     rows: the wire-deformer rig alone (Bibliowicz 2005), with the layered tissue pass (Lee,
-    Terzopoulos & Waters 1995), and ICT-FaceKit's ARKit shapes carried onto the head, weighted by
-    the AUs of each emotion through the ``au_arkit`` table."""
+    Terzopoulos & Waters 1995), and ``pose``'s shapes layer (:mod:`autobones.expressions.au_shapes`:
+    the AUs the ``au_arkit`` table maps drive ICT-FaceKit's ARKit shapes carried onto the head, the
+    others the muscles), what ``pose --expression`` gives on a rig made with ``--arkit``."""
+    from autobones.expressions.definitions import au_arkit_table
     from autobones.expressions.model import ExpressionModel
 
     mesh, marks = EXPRESSION_HEADS[name]
@@ -208,8 +193,10 @@ def expression_picture(name, out, size=420):
     rig = autobones.transfer(None if mesh is None else DATA / mesh, marks, arkit=True)
     model = ExpressionModel().fit(rig)
     emotions = ["neutral"] + list(model.expressions)
-    rows = {"wires": [], "wires + tissue": [], "ARKit (ICT shapes)": []}
-    unmapped = {}
+    rows = {"wires": [], "wires + tissue": [], "shapes layer (ARKit)": []}
+    table = {a for row in au_arkit_table(model.doc_) for a in row["au"]}
+    unmapped = {e: [f"AU{au}" for au in model.expressions[e]["au"] if int(str(au).rstrip("LR")) not in table]
+                for e in model.expressions}
     for e in emotions:
         if e == "neutral":
             for r in rows.values():
@@ -217,8 +204,7 @@ def expression_picture(name, out, size=420):
             continue
         rows["wires"].append(model.pose(expression=e))
         rows["wires + tissue"].append(model.pose(expression=e, tissue=True))
-        weights, unmapped[e] = emotion_arkit_weights(model, e)
-        rows["ARKit (ICT shapes)"].append(rig.pose(arkit=weights))
+        rows["shapes layer (ARKit)"].append(rig.pose(expression=e, layer="shapes"))
     V0 = rig.frame.to_canonical(rig.vertices)
     moved = {k: [np.linalg.norm(P - rig.vertices, axis=1) for P in r] for k, r in rows.items()}
     top = max(float(m.max()) for ms in moved.values() for m in ms) or 1.0
@@ -247,7 +233,7 @@ def expression_picture(name, out, size=420):
     path = Path(out) / f"expressions_{name}.png"
     render.save_png(path, img)
     print(f"{path}: rows {', '.join(rows)}; columns {', '.join(emotions)}; largest motion {top:.3g} (mesh units); "
-          "AUs without an ARKit shape: " + "; ".join(f"{e} {' '.join(u)}" for e, u in unmapped.items() if u))
+          "AUs without an ARKit shape (the muscles pose them in the shapes layer too): " + "; ".join(f"{e} {' '.join(u)}" for e, u in unmapped.items() if u))
 
 
 SPHINCTER_HEADS = ("default_head", "ict_identity002", "james", "robot", "goat")  # keys of EXPRESSION_HEADS
