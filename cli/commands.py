@@ -252,16 +252,7 @@ def _edit_landmarks(args):
     print(f"autobones landmarks: editing {args.head}; Save writes {session.output}"
           + (f" and {session.pp_output}" if session.pp_output else "") + "; Done on the page or Ctrl-C stops",
           file=sys.stderr, flush=True)
-    if not args.no_browser:
-        import webbrowser
-
-        webbrowser.open(server.url)
-    try:
-        server.serve_forever()
-    except KeyboardInterrupt:
-        print("autobones landmarks: stopped", file=sys.stderr)
-    finally:
-        server.server_close()
+    _serve(server, "landmarks", args.no_browser)
     print(f"autobones landmarks: saved {', '.join(session.saved)}" if session.saved
           else "autobones landmarks: closed without saving; nothing written", file=sys.stderr)
     return 0
@@ -364,17 +355,22 @@ def cmd_view(args):
     watch.lap("serve")
     print(server.url, flush=True)  # first line: scripts read the URL from here
     print(f"autobones view: showing {args.path} ({server.site.mode}); Ctrl-C to stop", file=sys.stderr, flush=True)
-    if not args.no_browser:
+    _serve(server, "view", args.no_browser)
+    return 0
+
+
+def _serve(server, command, no_browser):
+    """Open the page (unless ``no_browser``) and serve until the page says done or Ctrl-C."""
+    if not no_browser:
         import webbrowser
 
         webbrowser.open(server.url)
     try:
         server.serve_forever()
     except KeyboardInterrupt:
-        print("autobones view: stopped", file=sys.stderr)
+        print(f"autobones {command}: stopped", file=sys.stderr)
     finally:
         server.server_close()
-    return 0
 
 
 def cmd_export(args):

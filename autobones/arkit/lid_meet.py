@@ -59,21 +59,21 @@ def _smooth_fall(x):
     return 0.5 * (1.0 + np.cos(np.pi * x))
 
 
-def lid_region(V, F, landmarks, side, corner=0.15, depth=0.5):
+def lid_region(V, F, landmarks, side, corner=0.15, depth=0.5, faces=None):
     """Skin vertices near one eye (those a blink's lid move may reach) and their margin points.
 
     ``V`` (n, 3) float, ``F`` (m, 3) int, ``landmarks`` name -> (3,) with the eye's four
     (``endocanthion``, ``palpebrale_superius``, ``exocanthion``, ``palpebrale_inferius``), same
     frame and units. ``corner``: how far past the canthi (in canthal lengths); ``depth``: vertices
     farther than this many canthal lengths from the line across the eye at their ``t`` are left
-    out (the socket behind the lids).
+    out (the socket behind the lids). ``faces``: the skin's triangles (:func:`skin_faces`), when known.
 
     Returns ``(vertices (p,) int64, Ru, Rl)``: ``Ru`` / ``Rl`` (p, n) sparse, each vertex's point
     on the upper / lower margin at its own ``t``.
     """
     E, X = (np.asarray(landmarks[f"{n}_{side}"], dtype=np.float64) for n in ("endocanthion", "exocanthion"))
     fissure = float(np.linalg.norm(X - E))
-    faces = skin_faces(V, F)
+    faces = skin_faces(V, F) if faces is None else faces
     skin = np.unique(F[faces])
     t = canthal_parameter(V[skin], landmarks, side)
     near = (t > -corner) & (t < 1.0 + corner) & (np.linalg.norm(V[skin] - 0.5 * (E + X), axis=1) < fissure)
@@ -101,10 +101,10 @@ def _off_eyeballs(P, rest, eyeballs):
     return P
 
 
-def _meeting_move(V, F, free, rows, want, curtain=None, weight=1e3):
+def _meeting_move(n, F, free, rows, want, curtain=None, weight=1e3):
     """The smoothest move of the ``free`` vertices that brings the margin rows to ``want``.
 
-    ``rows`` (k, n) sparse: the margins' gap at k parameters (upper point minus lower point, as
+    ``n`` the vertex count, ``F`` (m, 3) the triangles; ``rows`` (k, n) sparse: the margins' gap at k parameters (upper point minus lower point, as
     interpolated from the vertices); ``want`` (k, 3) the change of that gap asked for. Minimises
     ``sum over edges |c_i - c_j|^2 + weight |rows c - want|^2`` over ``c`` on ``free`` (p,) int,
     zero elsewhere (the edges to fixed vertices hold the move's rim at 0): a membrane, so the move
@@ -113,7 +113,7 @@ def _meeting_move(V, F, free, rows, want, curtain=None, weight=1e3):
     its row). Returns (p, 3).
     """
     E = mesh_edges(F)
-    n, p = len(V), len(free)
+    p = len(free)
     pos = np.full(n, -1, dtype=np.int64)
     pos[free] = np.arange(p)
     E = E[(pos[E] >= 0).any(axis=1)]
@@ -172,10 +172,12 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
     out, report = dict(targets), {}
     sides = set(eye_sides(landmarks))
     t = np.linspace(0.0, 1.0, samples + 2)[1:-1]
+    skin = None
     for name, side in BLINKS.items():
         if name not in targets or side not in sides:
             continue
-        idx, Ru, Rl = lid_region(V, F, landmarks, side)
+        skin = skin_faces(V, F) if skin is None else skin
+        idx, Ru, Rl = lid_region(V, F, landmarks, side, faces=skin)
         if not len(idx):  # no skin near the eye's landmarks: nothing to close
             continue
         D = np.array(targets[name], dtype=np.float64)
@@ -190,7 +192,7 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
         free = idx[above]
         if not len(free):
             continue
-        _, (Su, Sl) = margin_curves(V, F, landmarks, side, t, skin_faces(V, F))
+        _, (Su, Sl) = margin_curves(V, F, landmarks, side, t, skin)
         G = (Su - Sl).tocsr()
         gap0 = G @ V
         # each vertex takes its share of its own margin point's move: x across the eye surface
@@ -198,7 +200,7 @@ def meet_lids(V, F, landmarks, targets, meet=0.95, eyeballs=(), samples=24, reac
         # rest gaps above the upper margin (the lid carries its margin, the brow stays)
         rise = (x - 1.0) * across / np.maximum(size2, floor)
         share = np.where(x <= 1.0, x, _smooth_fall(rise / reach))[above]
-        c = _meeting_move(V, F, free, G, -meet * (gap0 + G @ D), curtain=(free, share, Ru[above]))
+        c = _meeting_move(len(V), F, free, G, -meet * (gap0 + G @ D), curtain=(free, share, Ru[above]))
         D[free] = _off_eyeballs(V[free] + D[free] + c, V[free], eyeballs) - V[free]
         out[name] = D
         left = np.linalg.norm(gap0 + G @ D, axis=1) / np.maximum(np.linalg.norm(gap0, axis=1), 1e-300)

@@ -41,6 +41,7 @@ from ..geometry.validate import mesh_arrays
 from ..io.landmark_checks import validate_landmarks
 from ..io.landmark_names import NAMES
 from ..orient import Frame, frame_from_landmarks
+from ..rig_transfer.under_skin import ride
 from .refine import on_profile, symmetry_plane
 
 #: The names an assisted placement needs: well spread over the face, easy to click on any head.
@@ -136,10 +137,9 @@ def read_off(points_src, V_src, F_src, P):
         The points at the same barycentric coordinates in the carried triangles (target frame;
         near, not on, the target surface).
     face : (k,) int64
-        The source triangle of each point.
+        The source triangle of each point. (:func:`autobones.rig_transfer.under_skin.ride`.)
     """
-    _, face, bary, _ = closest_points(points_src, V_src, F_src)
-    return np.einsum("ij,ijk->ik", bary, P[F_src[face]]), face
+    return ride(points_src, V_src, F_src, P, return_faces=True)
 
 
 def confidence(distance, residual, agreement):

@@ -40,7 +40,7 @@ def spread_subsample(P, count):
     return chosen
 
 
-def ride(points, V_src, F_src, P):
+def ride(points, V_src, F_src, P, return_faces=False):
     """Points on the source surface moved with the correspondence.
 
     Parameters
@@ -54,13 +54,18 @@ def ride(points, V_src, F_src, P):
     P : (n, 3) float
         Each source vertex's corresponding point, target frame.
 
+    return_faces : bool
+        Also return each point's source triangle.
+
     Returns
     -------
     (k, 3) float
-        Each point's barycentric coordinates in its closest source triangle, applied to ``P``.
+        Each point's barycentric coordinates in its closest source triangle, applied to ``P``;
+        with ``return_faces``, also those triangles (k,) int.
     """
     _, face, bary = closest_points(np.asarray(points, dtype=np.float64), V_src, F_src)[:3]
-    return np.einsum("ki,kij->kj", bary, P[F_src[face]])
+    moved = np.einsum("ki,kij->kj", bary, P[F_src[face]])
+    return (moved, face) if return_faces else moved
 
 
 def under_skin_warp(V_src, P, reliable, control_points, partners=None):
