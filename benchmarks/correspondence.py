@@ -144,9 +144,22 @@ def ict_jaw_prior(Vn, F, lm_n):
     return jaw_prior(autobones.transfer((Vn, F), lm_n))
 
 
-def families(quick, jaw=True, symmetric="off"):
+def ict_expression_space(shapes, held_out):
+    """ICT's expressions as the source's expression space (``expressions=`` of the fit), without the
+    held-out expression and its mirror partner (leave-one-expression-out), nor the shapes that are
+    not a skin expression of their own (eye gaze and pupils turn the eyeballs; mouthClose is jawOpen's
+    corrective and folds the mesh alone)."""
+    names = [k[len("expression/"):] for k in shapes.files if k.startswith("expression/")]
+    out = {held_out, held_out[:-2] + {"_L": "_R", "_R": "_L"}[held_out[-2:]]} \
+        if held_out and held_out[-2:] in ("_L", "_R") else {held_out}
+    names = [n for n in names if n not in out and not n.startswith(("eyeLook", "PupilDilate", "mouthClose"))]
+    return {"names": names, "basis": np.stack([shapes[f"expression/{n}"] for n in names]).astype(np.float64)}
+
+
+def families(quick, jaw=True, symmetric="off", prior=False, ids=None, exprs=None, variants=None):
     """Identities x expressions x variants, errors per region (module doc, ``--families``); ``jaw``:
-    the source's jaw prior (:func:`ict_jaw_prior`) on, else off."""
+    the source's jaw prior (:func:`ict_jaw_prior`) on, else off; ``prior``: the expression prior on
+    (:func:`ict_expression_space`, each target's expression and its mirror left out of it)."""
     import fast_simplification
     import trimesh
 
@@ -160,11 +173,12 @@ def families(quick, jaw=True, symmetric="off"):
     names = sorted(lm_n)
     _, lface, lbary, _ = closest_points(np.array([lm_n[n] for n in names]), Vn, F)
     region = ict_regions(Vn, F, lm_n)
-    prior = ict_jaw_prior(Vn, F, lm_n) if jaw else None
-    ids = ["identity000", "identity010"] if quick else ["identity000", "identity005", "identity010", "identity015"]
-    exprs = [None, "jawOpen", "mouthSmile_L"] if quick else [None, "jawOpen", "mouthSmile_L", "eyeBlink_L",
-                                                               "mouthPucker", "browInnerUp_L"]
-    variants = ("as is", "remeshed", "decimated 5k", "x1000")
+    jaw_prior = ict_jaw_prior(Vn, F, lm_n) if jaw else None
+    ids = ids or (["identity000", "identity010"] if quick else
+                  ["identity000", "identity005", "identity010", "identity015"])
+    exprs = exprs or ([None, "jawOpen", "mouthSmile_L"] if quick else
+                      [None, "jawOpen", "mouthSmile_L", "eyeBlink_L", "mouthPucker", "browInnerUp_L"])
+    variants = variants or ("as is", "remeshed", "decimated 5k", "x1000")
     print(f"# ICT families: source the neutral head (27 landmarks), jaw prior {'on' if jaw else 'off'}; {len(ids)} identities x {len(exprs)} expressions "
           f"x {len(variants)} variants; regions (vertices): "
           + ", ".join(f"{r} {int((region == i).sum())}" for i, r in enumerate(REGIONS)))
@@ -177,6 +191,10 @@ def families(quick, jaw=True, symmetric="off"):
                 Vt = Vt + shapes[f"expression/{expr}"]
             lm_t = {n: (lbary[i, :, None] * Vt[F[lface[i]]]).sum(axis=0) for i, n in enumerate(names)}
             exex = np.linalg.norm(lm_t["exocanthion_l"] - lm_t["exocanthion_r"])
+            space = ict_expression_space(shapes, expr) if prior else None
+            if prior:   # identity modes not used as targets (ICT's modes are scaled to one s.d.)
+                space["identity"] = np.stack([shapes[f"identity/identity{i:03d}"] for i in range(20)
+                                              if f"identity{i:03d}" not in ids]).astype(np.float64)
             for variant in variants:
                 scale, VT, FT = 1.0, Vt, F
                 if variant == "remeshed":
@@ -192,8 +210,8 @@ def families(quick, jaw=True, symmetric="off"):
                 t, info = time.perf_counter(), {}
                 lm_T = {n: scale * p for n, p in lm_t.items()}
                 sym = Symmetry(symmetric).fit(Vn, F, lm_n, VT, FT, lm_T)
-                R = dense_correspondence(Vn, F, VT, FT, lm_n, lm_T, jaw=prior, details=info,
-                                         symmetry=sym.fit_option())[0]
+                R = dense_correspondence(Vn, F, VT, FT, lm_n, lm_T, jaw=jaw_prior, details=info,
+                                         symmetry=sym.fit_option(), expressions=space)[0]
                 dt = time.perf_counter() - t
                 e = 100 * np.linalg.norm(R / scale - Vt, axis=1) / exex
                 for i, r in enumerate(REGIONS):
@@ -205,6 +223,8 @@ def families(quick, jaw=True, symmetric="off"):
                                   for i, r in enumerate(REGIONS))
                       + (f"  jaw {info['jaw_deg']:.1f} deg ({info['jaw']['raw']:.2f})" if jaw else "")
                       + (f"  symmetric {'on' if sym.applied_ else 'off'}" if symmetric != "off" else "")
+                      + (f" expression (gain {info['expression']['gain']:.2f}, misfit {info['expression']['misfit']:.3f}) " + ", ".join(f"{k} {v:.2f}" for k, v in
+                                                    list(info["expression"]["weights"].items())[:3]) if prior else "")
                       + f"  ({dt:.1f} s)", flush=True)
 
     def table(rows, key_name):
@@ -228,13 +248,21 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="two pairs only")
     ap.add_argument("--remeshed", action="store_true", help="also score targets remeshed to another vertex layout")
     ap.add_argument("--families", action="store_true", help="identities x expressions x variants, per region")
+    ap.add_argument("--expression-prior", action="store_true",
+                    help="--families: the fit with ICT's expression space, each target's expression left out")
+    ap.add_argument("--ids", help="--families: identities, comma-separated (e.g. identity000,identity010)")
+    ap.add_argument("--expressions", help="--families: expressions, comma-separated ('neutral' for none)")
+    ap.add_argument("--variants", help="--families: variants, comma-separated ('as is,remeshed,decimated 5k,x1000')")
     ap.add_argument("--no-jaw-prior", action="store_true",
                     help="--families: fit without the source's jaw prior (the fit before issue #13's jaw prior)")
     ap.add_argument("--symmetric", choices=("off", "auto", "on"), default="off",
                     help="--families: the symmetric fit of autobones.rig_transfer.symmetry (default off)")
     args = ap.parse_args(argv)
     if args.families:
-        return families(args.quick, jaw=not args.no_jaw_prior, symmetric=args.symmetric)
+        split = lambda v: [None if x == "neutral" else x for x in v.split(",")] if v else None  # noqa: E731
+        return families(args.quick, jaw=not args.no_jaw_prior, symmetric=args.symmetric,
+                        prior=args.expression_prior, ids=split(args.ids), exprs=split(args.expressions),
+                        variants=split(args.variants))
     mesh = {h: load_mesh(DATA / "ict" / f"{h}.obj") for h in HEADS}
     lms = {h: json.loads((DATA / "ict" / f"{h}.landmarks.json").read_text())["landmarks"] for h in HEADS}
     F = mesh[HEADS[0]][1]

@@ -13,6 +13,10 @@ Writes, beside ICT-FaceKit's MIT LICENSE:
   ``cheekPuff`` are the sums of ICT's L and R halves. ICT's eyeLook* shapes move the lids
   and the eye-surface shells but not the eyeballs (those turn by ICT's eye joints), so
   no eyeball turn is taken from them (see autobones/arkit/targets.py).
+- ``ict_identity.npz``: ICT's 20 identity modes (principal components of its identities, each
+  scaled to one standard deviation) on the same skin vertices, ``modes`` (20, n, 3) float16 cm: the
+  expression fit solves them with the expression so a head's own shape is not taken for one
+  (:mod:`autobones.rig_transfer.expression_prior`).
 - ``ict_arkit.json``: the names, the 27 contract landmarks of the neutral head, the
   storage error, the source and licence.
 """
@@ -85,8 +89,21 @@ def main(ict=os.path.join(ROOT, "..", "shared", "data", "ict")):
         json.dump(meta, fh, indent=1)
     shutil.copyfile(os.path.join(ict, "LICENSE"), os.path.join(OUT, "LICENSE"))
     size = sum(os.path.getsize(os.path.join(OUT, f)) for f in os.listdir(OUT))
+    write_identity(ict)
     print(f"{OUT}: {len(skin)} skin vertices, {len(Fs)} triangles, {len(counts)} shapes "
           f"(+ {', '.join(ABSENT)} absent), float16 error <= {worst:.2e} cm, {size / 1e6:.2f} MB")
+
+
+def write_identity(ict=os.path.join(ROOT, "..", "shared", "data", "ict")):
+    """``ict_identity.npz`` (module doc) beside the shapes; returns its path."""
+    with np.load(os.path.join(OUT, "ict_arkit.npz")) as z:
+        skin = z["skin_index"].astype(np.int64)
+    with np.load(os.path.join(ict, "ict_facekit_shapes.npz")) as z:
+        names = sorted(k for k in z.files if k.startswith("identity/"))
+        modes = np.stack([z[k][skin] for k in names]).astype(np.float16)
+    path = os.path.join(OUT, "ict_identity.npz")
+    np.savez_compressed(path, modes=modes)
+    return path
 
 
 if __name__ == "__main__":

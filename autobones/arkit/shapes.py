@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 import os
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -20,6 +21,7 @@ from .names import ABSENT, ARKIT_NAMES
 # (the robot shares 7 with ICT)
 MIN_LANDMARKS = 6
 NPZ, JSON = "ict_arkit.npz", "ict_arkit.json"  # the set's two files (the packaged set's names, kept for any set)
+IDENTITY_NPZ = "ict_identity.npz"  # optional: identity modes of the set's skin
 
 
 def shapes_folder():
@@ -42,6 +44,10 @@ class ShapeSet:
         Displacement of every base vertex at weight 1, per ARKit name (absent names left out).
     meta : dict
         The sidecar JSON (source, licence, units, ...).
+    identity : (j, n, 3) float64 or None
+        Identity modes of the base skin (one standard deviation each, its units), when the folder has
+        ``ict_identity.npz`` (the packaged set: ICT's 20): the expression fit solves them with the
+        expression (:mod:`autobones.rig_transfer.expression_prior`).
     """
 
     vertices: np.ndarray
@@ -49,6 +55,7 @@ class ShapeSet:
     landmarks: dict
     deltas: dict
     meta: dict
+    identity: Optional[np.ndarray] = None
 
     @property
     def names(self):
@@ -90,7 +97,13 @@ def _load(folder, stamp):
     if missing:
         raise AutobonesError(f"{folder}: the shape set lacks {', '.join(missing)}")
     landmarks = {k: np.asarray(v, dtype=np.float64) for k, v in meta["landmarks"].items()}
-    return ShapeSet(V, F, landmarks, deltas, meta)
+    identity = None
+    if os.path.isfile(os.path.join(folder, IDENTITY_NPZ)):
+        with np.load(os.path.join(folder, IDENTITY_NPZ), allow_pickle=False) as z:
+            identity = z["modes"].astype(np.float64)
+        if identity.shape[1:] != V.shape:
+            raise AutobonesError(f"{folder}: {IDENTITY_NPZ} is not for this skin ({identity.shape[1:]} vs {V.shape})")
+    return ShapeSet(V, F, landmarks, deltas, meta, identity)
 
 
 def flipped_triangles(V, F, deltas):

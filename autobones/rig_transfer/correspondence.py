@@ -120,6 +120,7 @@ from ..geometry.rotations import rotate_between
 from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
 from ..geometry.validate import mesh_arrays
 from ..geometry.tps import ThinPlateSpline, as_points, landmark_arrays
+from .expression_prior import JAW_SHAPES, check_space, fit_expression, pose, weights_by_name
 from .jaw_prior import check_prior, estimate_jaw_angle, open_jaw
 from .stick import stick
 from .symmetry import mirror_operator, symmetrize
@@ -464,7 +465,8 @@ class _Matcher:
 
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
                 landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="blend", symmetric_weight=10.0, coarse_vertices=8000,
-                fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None, symmetry=None):
+                fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None, symmetry=None,
+                expressions=None):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
     Parameters
@@ -525,6 +527,14 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         ``target_plane`` (unit normal, offset; each mesh's frame) and ``partner_tol`` (source
         units: a source vertex whose reflection is further from the source surface has no
         partner), from :meth:`autobones.rig_transfer.symmetry.Symmetry.fit_option`. None: off.
+    expressions : dict, optional
+        The source skin's expression space (:mod:`autobones.rig_transfer.expression_prior`): ``names``
+        (k,), ``basis`` (k, n, 3) displacements at weight 1 (source units), optionally ``identity``
+        ((j, n, 3) identity modes solved with it) or ``weights`` ({name: weight}, found on another skin
+        of the same space): the source wears them (given
+        weights, less the jaw opening when ``jaw`` opened it), or the weights the target seems to wear
+        (solved, :func:`~autobones.rig_transfer.expression_prior.fit_expression`), before the warp;
+        ``details['expression']`` says which. None: the neutral source.
 
     Returns
     -------
@@ -549,10 +559,14 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
     if edge_reference not in ("source", "tps", "blend"):
         raise AutobonesError(f"edge_reference must be 'blend', 'source' or 'tps', got {edge_reference!r}")
+    V_neutral = V_src
     if jaw is not None:
         V_src, P = _open_source_jaw(V_src, F_src, P, Q, jaw, details)
     elif details is not None:
         details["jaw_deg"] = 0.0
+    if expressions is not None:
+        V_src, P = _pose_source_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, details,
+                                           jaw_opened=V_src is not V_neutral)
     tps = ThinPlateSpline().fit(P, Q)
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight,
@@ -582,6 +596,28 @@ def _open_source_jaw(V_src, F_src, P, Q, jaw, details):
         return V_src, P
     V_src = open_jaw(V_src, w, pivot, axis, angle, glide)
     return V_src, P + np.einsum("ij,ijk->ik", lbary, V_src[F_src[lface]]) - on_skin
+
+
+def _pose_source_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, details, jaw_opened):
+    """The source skin ``V_src`` (n, 3) and its landmarks ``P`` (k, 3) wearing the expression the target
+    seems to wear (:mod:`.expression_prior`: the space's given ``weights``, else solved here); each
+    landmark moves with its closest triangle of the skin. Given weights lose their jaw opening when
+    the jaw prior has already opened the jaw (``jaw_opened``)."""
+    names, basis = check_space(expressions, len(V_src))
+    info = {}
+    if expressions.get("weights") is not None:
+        w = weights_by_name(names, expressions["weights"], drop=JAW_SHAPES if jaw_opened else ())
+        info["weights"] = {n: round(float(v), 3) for n, v in zip(names, w) if v > 0.05}
+    else:
+        w = fit_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, identity=expressions.get("identity"),
+                           details=info)
+    if details is not None:
+        details["expression"] = info
+    if not w.any():
+        return V_src, P
+    _, lface, lbary, _ = closest_points(P, V_src, F_src)
+    moved = pose(V_src, basis, w)
+    return moved, P + np.einsum("ij,ijk->ik", lbary, moved[F_src[lface]] - V_src[F_src[lface]])
 
 
 def _coarse_to_fine(V_src, F_src, V_tgt, F_tgt, P, Q, tps, coarse_vertices, schedule, fine_schedule, args):

@@ -32,6 +32,7 @@ import os
 import numpy as np
 
 from .correspondence import dense_correspondence
+from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
@@ -133,8 +134,35 @@ def generic_jaw_prior(generic, rig=None):
     return jaw_prior(generic)
 
 
+EXPRESSION_FILE = "expressions.npz"
+
+
+@functools.lru_cache(maxsize=4)
+def _expressions_in_folder(path, mtime_ns):
+    # a pure function of the file (its time stamp in the key); read-only for its callers
+    with np.load(path, allow_pickle=False) as z:
+        return {"names": [str(n) for n in z["names"]], "basis": z["basis"].astype(np.float64)}
+
+
+def generic_expression_space(generic, rig=None):
+    """The generic skin's expression space (``expressions=`` of the fit,
+    :mod:`autobones.rig_transfer.expression_prior`): the ARKit shapes carried onto the generic rig's
+    own skin, ``expressions.npz`` in its folder (``names`` (k,), ``basis`` (k, n, 3) float16; the
+    built-in rig's from ``generic_rig/build_expression_space.py``). None for a rig folder without
+    the file, or a rig given as an object, or a file for another skin."""
+    if rig is not None and not isinstance(rig, (str, os.PathLike)):
+        return None
+    from ..generic_rig import default_rig_path
+
+    path = os.path.join(os.path.abspath(os.fspath(default_rig_path() if rig is None else rig)), EXPRESSION_FILE)
+    if not os.path.isfile(path):
+        return None
+    space = _expressions_in_folder(path, os.stat(path).st_mtime_ns)
+    return space if space["basis"].shape[1:] == (len(generic.vertices), 3) else None
+
+
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
-             symmetric="auto", **fit_options):
+             symmetric="auto", expression_fit=True, **fit_options):
     """Carry the generic rig onto a landmarked head.
 
     Parameters
@@ -159,6 +187,11 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     arkit : bool
         Also make the 52 ARKit shapes on this head (:func:`autobones.arkit.targets.arkit_targets`):
         ``rig.arkit_targets`` and the ``rig.arkit`` record; ``save`` writes them as morph targets.
+    expression_fit : bool
+        Fit the generic skin (and, with ``arkit``, the ARKit set's skin) wearing the expression the head
+        seems to wear (:mod:`autobones.rig_transfer.expression_prior`: an open jaw, a smile, a pucker;
+        a neutral head stays neutral), so the skin does not slide where the landmarks say nothing;
+        ``rig.options['expression_fit']`` says what was found. False: fit the neutral skins.
     symmetric : {"auto", "on", "off"}
         Keep the correspondence mirror-symmetric (:mod:`autobones.rig_transfer.symmetry`): ``auto``
         when the head's landmark pairs are mirror images and the head and the generic skin are
@@ -194,7 +227,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     body = stray_parts(V, F)
     if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
         return body.restore(transfer((body.V, body.F), landmarks, rig, up, front, control_points, details, arkit,
-                                     symmetric, **fit_options), source)
+                                     symmetric, expression_fit, **fit_options), source)
     generic = load_generic(rig)
     lap("load")
     lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
@@ -216,23 +249,37 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     fit_options.setdefault("symmetry", symmetry.fit_option())
     lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
+    found, found_details = {}, {}
+    if expression_fit or arkit:
+        from ..arkit.targets import rig_shape_set
+
+        shapes = rig_shape_set(rig_option)
+    if expression_fit:
+        # the expression solved once, on the ARKit set's skin (a real face: what its warp leaves between
+        # the landmarks is the expression; on the generic's own skin it would be the identity); both
+        # fits below wear it
+        found, found_details = shape_set_expression(shapes, V, F, lm, identity=shapes.identity)
+        lap("expression")
     pending = None
     if arkit:
         # the ARKit shape set's own correspondence needs only the head and its landmarks: fitted on the
         # second core while this thread fits the generic rig (most of both runs outside the GIL)
         from concurrent.futures import ThreadPoolExecutor
 
-        from ..arkit.targets import rig_shape_set, shape_correspondence
+        from ..arkit.targets import shape_correspondence
 
-        shapes = rig_shape_set(rig_option)
         pool = ThreadPoolExecutor(1)
-        pending = pool.submit(shape_correspondence, shapes, V, F, lm)
+        pending = pool.submit(shape_correspondence, shapes, V, F, lm, None, found if expression_fit else None,
+                              **({} if expression_fit else {"expressions": None}))
         pool.shutdown(wait=False)  # the worker ends with its one task
     fit_timings = {}
     if "jaw" not in fit_options:
         # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
         # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
         fit_options["jaw"] = generic_jaw_prior(generic, rig)
+    if "expressions" not in fit_options:
+        space = generic_expression_space(generic, rig) if any(found.values()) else None
+        fit_options["expressions"] = None if space is None else {**space, "weights": found}
     fit_details = {}
     P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
                                        details=fit_details, **fit_options)
@@ -276,6 +323,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
                "joints_from_ears": from_ears,
                "symmetric": symmetry.record_,
+               "expression_fit": _expression_record(found_details, fit_details, expression_fit),
                **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
@@ -293,6 +341,17 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         out.options["arkit"] = True
         lap("arkit")
     return out
+
+
+def _expression_record(found, fit_details, asked):
+    """The sidecar's ``expression_fit``: the expression the head seems to wear (``weights`` {name:
+    weight} over 0.05, empty for a neutral head; ``gain``: the share of the neutral skin's misfit it
+    removes) and the weights the generic skin wore in its fit (``generic``), or why it did not run."""
+    if not asked:
+        return {"off": "expression_fit=False (--no-expression-fit)"}
+    return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
+            "solved_on": "the ARKit shape set's skin",
+            "generic": fit_details.get("expression", {}).get("weights", {})}
 
 
 EAR_LANDMARKS = ("tragion_l", "tragion_r", "exocanthion_l", "exocanthion_r")
