@@ -347,7 +347,9 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     t = time.perf_counter()
     by_name = dict(zip(names, X))
     turned = _turn_eyeballs(rig, V, by_name, eyes)
-    targets = _all_targets(by_name, V)
+    # all 52 names, a name the set lacks all zero; rounded to the float32 the glb stores
+    targets = {n: (np.zeros_like(V) if by_name.get(n) is None else by_name[n]).astype(np.float32).astype(np.float64)
+               for n in ARKIT_NAMES}
     tim["eyes"] = time.perf_counter() - t
     t = time.perf_counter()
     on_top, alone, judged = _fold_counts(V, F, targets, by_name, fold_report, turned)
@@ -400,17 +402,6 @@ def _repair_folds(V, F, X, names, keep, repair_folds):
     if repair_folds:
         X, fold_report = unfold_shapes(V, F, X, names, fixed=keep, dtype=np.float32)
     return X, fold_report
-
-
-def _all_targets(by_name, V):
-    """All 52 :data:`ARKIT_NAMES` -> (n, 3) float64 rounded to float32 (what the glb stores), from
-    ``by_name``; a name it lacks is all zero (``V`` (n, 3) gives the shape)."""
-    targets = {}
-    for name in ARKIT_NAMES:
-        d = by_name.get(name)
-        d = np.zeros_like(V) if d is None else d
-        targets[name] = d.astype(np.float32).astype(np.float64)
-    return targets
 
 
 def _warn_still_folded(judged, src):
