@@ -187,45 +187,63 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         candidates, cues = [(up_v, front_v)], None
     else:
         sym_err, normal, offset, cues = _symmetry_plane(V, F, P, tree, rms, up_v, front_v)
-    # free (nothing forced): no step reads the file's axes, so a turned or scaled copy of a head gets
-    # this frame turned or scaled (to round-off); a forced axis is the user's and is kept as given
-    free = up_v is None and front_v is None
     if cues is None:
         cues = _cut_cues(V, F)  # only the frame's cut needs them when up is forced
-    planar = is_planar_cut(cues)
     if up_v is None or front_v is None:
+        # free (nothing forced): no step reads the file's axes, so a turned or scaled copy of a head
+        # gets this frame turned or scaled (to round-off); a forced axis is the user's, kept as given
+        free = up_v is None and front_v is None
         candidates = shape_candidates(P, normal, cues) if free else axis_candidates(normal, up_v, front_v)
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
+    up_d, front_d = _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v)
+    return _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err)
+
+
+def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
+    """The (up, front) unit pair (3,), (3,) of the head, input frame, among ``candidates`` (list of
+    (up, front) pairs): the one whose top slice best overlays the reference head ``ref`` ((k, 3)
+    canonical sample), after the cut cues ``cues`` have ruled out ups (or marked a face-only
+    capture), the angle refined when nothing is forced; a non-human head cut at the neck stands on
+    its cut. ``P`` (s, 3) the surface sample, ``normal`` (3,) and ``offset`` the symmetry plane."""
+    free = up_v is None and front_v is None
+    planar = is_planar_cut(cues)
     face_only = False
     every, full_ref = candidates, ref
     if len(candidates) > 1 and up_v is None:
         candidates, ref, face_only = cut_candidates(P, normal, candidates, cues, ref)
-    if len(candidates) > 1:
-        if face_only:  # a face capture: each candidate against the better of its two front parts
-            scores, ref = best_part_scores(P, candidates, ref)
-        else:
-            scores = overlay_scores(P, candidates, ref)
-        if face_only and front_v is None and planar:
-            # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
-            # capture must overlay the reference's face far better than its whole head stood on
-            # the cut, straight across it (the 12 ups start there; ups 30-60 degrees off it laid
-            # Lee Perry-Smith's front half on its back)
-            neck = [(u, f) for u, f in every if u @ -cues["loop_normal"] > 0.95]
-            neck_scores = overlay_scores(P, neck, full_ref) if neck else []
-            if neck and min(scores) > FACE_VS_NECK * min(neck_scores):
-                candidates, scores, ref, face_only = neck, neck_scores, full_ref, False
-        best = int(np.argmin(scores))
-        up_d, front_d = candidates[best]
-        if free:
-            # candidates 30 degrees apart round the plane: settle the angle between them
-            up_d, front_d = refine_angle(P, normal, up_d, front_d, ref[best] if isinstance(ref, list) else ref)
-        if free and planar and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE):
-            # no human face matches (an animal, a cartoon): the reference head cannot tell its
-            # front from its back, the neck cut can
-            up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
+    if len(candidates) <= 1:
+        return candidates[0]
+    if face_only:  # a face capture: each candidate against the better of its two front parts
+        scores, ref = best_part_scores(P, candidates, ref)
     else:
-        up_d, front_d = candidates[0]
+        scores = overlay_scores(P, candidates, ref)
+    if face_only and front_v is None and planar:
+        # a head cut at a wide neck looks as open as a face cut behind the ears: a face-only
+        # capture must overlay the reference's face far better than its whole head stood on
+        # the cut, straight across it (the 12 ups start there; ups 30-60 degrees off it laid
+        # Lee Perry-Smith's front half on its back)
+        neck = [(u, f) for u, f in every if u @ -cues["loop_normal"] > 0.95]
+        neck_scores = overlay_scores(P, neck, full_ref) if neck else []
+        if neck and min(scores) > FACE_VS_NECK * min(neck_scores):
+            candidates, scores, ref, face_only = neck, neck_scores, full_ref, False
+    best = int(np.argmin(scores))
+    up_d, front_d = candidates[best]
+    if free:
+        # candidates 30 degrees apart round the plane: settle the angle between them
+        up_d, front_d = refine_angle(P, normal, up_d, front_d, ref[best] if isinstance(ref, list) else ref)
+    if free and planar and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE):
+        # no human face matches (an animal, a cartoon): the reference head cannot tell its
+        # front from its back, the neck cut can
+        up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
+    return up_d, front_d
+
+
+def _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err):
+    """The :class:`Frame` of vertices ``V`` (n, 3) (input frame and units; ``F`` (m, 3) for the
+    vertices in use) from the symmetry plane (unit ``normal`` (3,), ``offset``), the chosen
+    ``up_d`` and ``front_d`` (3,) and the sample's centroid ``center`` (3,); the neck cut of
+    ``cues`` in canonical terms when it is planar, ``sym_err`` the mirror error in RMS radii."""
     # an exact frame from the refined symmetry normal and the chosen up, in an order that does
     # not depend on which input axis was which (so rotated inputs give the same frame)
     left = normal * np.sign(normal @ np.cross(up_d, front_d))
@@ -236,7 +254,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     used = used_vertices(F, len(V))
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())
-    cut = ((cues["loop_centre"] - origin) @ R.T / size, cues["loop_normal"] @ R.T) if planar else None
+    cut = ((cues["loop_centre"] - origin) @ R.T / size, cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
     return Frame(rotation=R, origin=origin, size=size, symmetry_error=float(sym_err), cut=cut)
 
 

@@ -107,6 +107,32 @@ def gradient_operator(V, F):
     return G, area
 
 
+def _anchored(moving, F_src, face, F_tgt, n_t):
+    """Target vertices (n_t,) bool none of whose triangles' source triangle (``face`` (m_t,) int,
+    every target triangle's nearest, covered or not) has a ``moving`` (n_s,) bool corner: anchors
+    at 0 (before the covered-parts filter)."""
+    # anchors: target vertices whose nearest source triangle never moves
+    still_face = ~moving[F_src[face]].any(axis=1)  # every target triangle, covered or not
+    touches_moving = np.zeros(n_t, dtype=bool)
+    np.logical_or.at(touches_moving, F_tgt.ravel(), np.repeat(~still_face, 3))
+    return ~touches_moving
+
+
+def _source_picker(faces, covered, used, m_t, m_s):
+    """``S`` (3 m_t, 3 mu) sparse: each covered target triangle's gradient (rows ``3t + c``) as the
+    mean of its sample points' source triangles' (``faces`` (m_t, samples) of the m_s, ``used``
+    the mu that some covered triangle takes; columns ``3u + c``)."""
+    # right-hand sides from the used source triangles' gradients: G^T A S, S picking each covered
+    # target triangle's source triangle (rows 3t + c <- 3u + c)
+    slot = np.full(m_s, -1)
+    slot[used] = np.arange(len(used))
+    ns = faces.shape[1]
+    tc = np.flatnonzero(covered)
+    rows = np.broadcast_to(3 * tc[:, None, None] + np.arange(3)[None, None, :], (len(tc), ns, 3)).ravel()
+    cols = (3 * slot[faces[covered]][:, :, None] + np.arange(3)[None, None, :]).ravel()
+    return sp.csr_matrix((np.full(len(rows), 1.0 / ns), (rows, cols)), shape=(3 * m_t, 3 * len(used)))
+
+
 class DeformationTransfer:
     """Carry a source's shapes onto a target through a dense correspondence (module docstring).
 
@@ -187,6 +213,47 @@ class DeformationTransfer:
         self.V_src_, self.F_src_ = V_src, F_src
         n_t, m_t = len(V_tgt), len(F_tgt)
         free = None if free is None else np.asarray(free, dtype=bool)
+        EP = triangle_frames(P, F_src)
+        faces, covered = self._map_triangles(P, F_src, EP, V_tgt, F_tgt, free)
+        face = faces[:, 0]
+        # each source triangle's turn onto the target: rotation of the warp's gradient
+        used = np.unique(faces[covered])
+        R = self._turns(V_src, F_src, P, EP, used)
+        anchored = np.zeros(n_t, dtype=bool)
+        if moving is not None:
+            anchored = _anchored(np.asarray(moving, dtype=bool), F_src, face, F_tgt, n_t) & self.covered_parts_
+        self.anchored_ = anchored
+        G, area = gradient_operator(V_tgt, F_tgt)
+        # the triangles set free weigh little: held at Q = I with full weight, a scan's eye
+        # surface would tie the upper lid to the lower one and no blink could close it
+        weight = np.ones(m_t) if free is None else np.where(free, self.hole_weight, 1.0)
+        A3 = sp.diags(np.repeat(area * weight, 3))
+        L = (G.T @ A3 @ G).tocsc()
+        scale = self._scale = float(L.diagonal().mean())
+        mass = np.bincount(F_tgt.ravel(), np.repeat(area / 3.0, 3), minlength=n_t)
+        diag = self.anchor_weight * scale * anchored + self.screening * scale * mass / max(mass.mean(), 1e-300)
+        S = _source_picker(faces, covered, used, m_t, len(F_src))
+        # parts that take no gradient (eyeballs, teeth, lashes) are blocks of their own whose right-hand
+        # side is 0: left out of the solve (their vertices inherit in transform), which on an ICT head
+        # is then 43 % smaller
+        solved = self.covered_parts_.copy()
+        if pinned is not None and len(pinned):
+            solved |= np.isin(self._part, self._part[np.asarray(pinned, dtype=np.int64)])
+        rows = self._rows = np.flatnonzero(solved)
+        self._rhs_operators(V_src, F_src, used, R, (G.T @ A3 @ S).tocsr()[rows])
+        self.timings_ = {"map": time.perf_counter() - t0}
+        self._factorise(L[rows][:, rows], diag[rows], scale, pinned, n_t)
+        self.n_t_, self.F_tgt_, self.V_tgt_ = n_t, F_tgt, V_tgt
+        return self
+
+    def _map_triangles(self, P, F_src, EP, V_tgt, F_tgt, free):
+        """The source triangles (m_t, samples) int under each target triangle's sample points (its
+        centroid, and halfway to each corner with ``samples`` 4) on the source laid on the target
+        (``P`` (n_s, 3), ``F_src`` (m_s, 3), frames ``EP`` (m_s, 3, 3): :func:`triangle_frames`),
+        and which target triangles take a gradient (m_t,) bool: their centroid near the laid
+        source, the normals agreeing, in a part covered enough, not ``free``. Sets
+        ``covered_parts_``, ``source_face_`` and the target's parts."""
+        m_t = len(F_tgt)
         # source triangle under each target triangle's centroid, on the source laid on the target
         cent = V_tgt[F_tgt].mean(axis=1)
         # more samples per target triangle than its centroid: halfway to each corner too, so a target
@@ -197,12 +264,11 @@ class DeformationTransfer:
         face, d2 = faces[:, 0], d2_all[:m_t]
         edge = np.linalg.norm(V_tgt[F_tgt] - V_tgt[np.roll(F_tgt, 1, axis=1)], axis=2).mean()
         nt = triangle_normals(V_tgt, F_tgt)
-        EP = triangle_frames(P, F_src)
         ns = EP[:, :, 2]
         cos = np.einsum("ij,ij->i", nt, ns[face]) / np.maximum(
             np.linalg.norm(nt, axis=1) * np.linalg.norm(ns[face], axis=1), 1e-300)
         covered = (np.sqrt(d2) <= self.max_distance * edge) & (cos > 0.5)
-        part = self._part = mesh_parts(n_t, F_tgt)
+        part = self._part = mesh_parts(len(V_tgt), F_tgt)
         fpart = part[F_tgt[:, 0]]
         frac = np.bincount(fpart, covered, minlength=part.max() + 1) / np.maximum(np.bincount(fpart), 1)
         covered &= frac[fpart] >= self.min_part_coverage
@@ -210,8 +276,12 @@ class DeformationTransfer:
             covered &= ~free
         self.covered_parts_ = frac[part] >= self.min_part_coverage
         self.source_face_ = np.where(covered, face, -1)
-        # each source triangle's turn onto the target: rotation of the warp's gradient
-        used = np.unique(faces[covered])
+        return faces, covered
+
+    def _turns(self, V_src, F_src, P, EP, used):
+        """The source-to-target turn (mu, 3, 3) of each ``used`` source triangle (``turn``: the
+        polar rotation of the warp's gradient ``EP E^-1``, smoothed over rings or not, or one
+        rotation of the whole source onto ``P`` (n_s, 3))."""
         R = np.zeros((0, 3, 3))  # the turn of each used source triangle
         if len(used):
             if self.turn == "global":
@@ -230,44 +300,14 @@ class DeformationTransfer:
                         Wf = to_f @ (to_v @ Wf)
                     W = Wf.reshape(-1, 3, 3)
                 R = polar_rotations(W[used])
-        # anchors: target vertices whose nearest source triangle never moves
-        anchored = np.zeros(n_t, dtype=bool)
-        if moving is not None:
-            moving = np.asarray(moving, dtype=bool)
-            still_face = ~moving[F_src[face]].any(axis=1)  # every target triangle, covered or not
-            touches_moving = np.zeros(n_t, dtype=bool)
-            np.logical_or.at(touches_moving, F_tgt.ravel(), np.repeat(~still_face, 3))
-            anchored = ~touches_moving & self.covered_parts_
-        self.anchored_ = anchored
-        G, area = gradient_operator(V_tgt, F_tgt)
-        # the triangles set free weigh little: held at Q = I with full weight, a scan's eye
-        # surface would tie the upper lid to the lower one and no blink could close it
-        weight = np.ones(m_t) if free is None else np.where(free, self.hole_weight, 1.0)
-        A3 = sp.diags(np.repeat(area * weight, 3))
-        L = (G.T @ A3 @ G).tocsc()
-        scale = self._scale = float(L.diagonal().mean())
-        mass = np.bincount(F_tgt.ravel(), np.repeat(area / 3.0, 3), minlength=n_t)
-        diag = self.anchor_weight * scale * anchored + self.screening * scale * mass / max(mass.mean(), 1e-300)
-        # right-hand sides from the used source triangles' gradients: G^T A S, S picking each covered
-        # target triangle's source triangle (rows 3t + c <- 3u + c)
-        slot = np.full(len(F_src), -1)
-        slot[used] = np.arange(len(used))
-        ns = faces.shape[1]
-        tc = np.flatnonzero(covered)
-        rows = np.broadcast_to(3 * tc[:, None, None] + np.arange(3)[None, None, :], (len(tc), ns, 3)).ravel()
-        cols = (3 * slot[faces[covered]][:, :, None] + np.arange(3)[None, None, :]).ravel()
-        S = sp.csr_matrix((np.full(len(rows), 1.0 / ns), (rows, cols)), shape=(3 * m_t, 3 * len(used)))
-        # parts that take no gradient (eyeballs, teeth, lashes) are blocks of their own whose right-hand
-        # side is 0: left out of the solve (their vertices inherit in transform), which on an ICT head
-        # is then 43 % smaller
-        solved = self.covered_parts_.copy()
-        if pinned is not None and len(pinned):
-            solved |= np.isin(part, part[np.asarray(pinned, dtype=np.int64)])
-        rows = self._rows = np.flatnonzero(solved)
-        self._rhs_operators(V_src, F_src, used, R, (G.T @ A3 @ S).tocsr()[rows])
-        L, diag = L[rows][:, rows], diag[rows]
-        self.timings_ = {"map": time.perf_counter() - t0}
+        return R
+
+    def _factorise(self, L, diag, scale, pinned, n_t):
+        """Factorise the solved rows' system ``L`` (r, r) sparse plus ``diag`` (r,); with ``pinned``
+        target vertices, keep the system with their positional terms too (factorised when first
+        used). ``scale``: the Laplacian's mean diagonal. Times it as ``factor``."""
         t1 = time.perf_counter()
+        rows = self._rows
         self._solve = factor_spd(L + sp.diags(diag)) if len(rows) else None
         self._pinned = self._solve_pinned = None
         if pinned is not None and len(pinned):
@@ -278,8 +318,6 @@ class DeformationTransfer:
             pin[self._pinned] = self.pin_weight * scale
             self._pinned_system = L + sp.diags(diag + pin)  # factorised when first used
         self.timings_["factor"] = time.perf_counter() - t1
-        self.n_t_, self.F_tgt_, self.V_tgt_ = n_t, F_tgt, V_tgt
-        return self
 
     def _rhs_operators(self, V_src, F_src, used, R, B):
         """Keep what the right-hand sides of every shape need (:meth:`_right_hand_sides`).

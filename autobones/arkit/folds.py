@@ -173,13 +173,7 @@ def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=20000, rest_no
         ``before`` and ``after`` (turned-over triangle counts), ``iterations``, ``vertices`` (how
         many changed), ``max_change`` (largest change of a vertex's displacement, input units).
     """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    D0 = np.asarray(D, dtype=np.float64)
-    if V.ndim != 2 or V.shape[1] != 3 or D0.shape != V.shape:
-        raise AutobonesError(f"fold repair: vertices {V.shape} and displacement {D0.shape} must both be (n, 3)")
-    if F.ndim != 2 or F.shape[1] != 3 or (len(F) and (F.min() < 0 or F.max() >= len(V))):
-        raise AutobonesError(f"fold repair: faces {F.shape} must be (m, 3) indices of the {counted(len(V), 'vertex', 'vertices')}")
+    V, F, D0 = _checked(V, F, D)
     n = len(V)
     ctx = _Context(V, F, rest_normals) if context is None else context
     bad = folded_triangles(V, F, D0, base, ctx.rest) if folded is None else np.asarray(folded, dtype=bool)
@@ -191,47 +185,7 @@ def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=20000, rest_no
     target = margin * 0.5 * ctx.size
     w = np.ones(n) if fixed is None else (~np.asarray(fixed, dtype=bool)).astype(np.float64)
     X = V + B + D0
-    active = bad.copy()
-    moved = np.zeros(n, dtype=bool)
-    T = np.flatnonzero(active)
-    for it in range(iterations):
-        A = _signed_areas(X, F, T, unit)
-        viol = (A < target[T]) & (active[T] | (A < 0))
-        # done when every constraint is at least half met (a margin against rounding to float32)
-        if not (A < 0.5 * target[T]).any():
-            # nothing left among these: only triangles of moved vertices can have turned since
-            near = ctx.faces_of(np.flatnonzero(moved))
-            near = near[~active[near]]
-            newly = near[_signed_areas(X, F, near, unit) < 0]
-            if not len(newly):
-                break
-            active[newly] = True
-            T = np.flatnonzero(active)
-            continue
-        active[T[viol]] = True
-        Tb = T[viol]
-        x0, x1, x2 = X[F[Tb, 0]], X[F[Tb, 1]], X[F[Tb, 2]]
-        u = unit[Tb]
-        grads = (0.5 * cross_rows(x1 - x2, u), 0.5 * cross_rows(x2 - x0, u), 0.5 * cross_rows(x0 - x1, u))
-        wk = [w[F[Tb, k]] for k in range(3)]
-        den = sum(wc * np.einsum("ij,ij->i", g, g) for wc, g in zip(wk, grads))
-        lam = (target[Tb] - A[viol]) / np.maximum(den, 1e-300)
-        verts, local = np.unique(F[Tb], return_inverse=True)
-        local = local.reshape(-1, 3)
-        move = np.zeros((len(verts), 3))
-        cnt = np.bincount(local.ravel(), minlength=len(verts)).astype(np.float64)
-        for k in range(3):
-            step = (wk[k] * lam)[:, None] * grads[k]
-            for c in range(3):
-                move[:, c] += np.bincount(local[:, k], step[:, c], minlength=len(verts))
-        X[verts] += move / cnt[:, None]
-        moved[verts] |= w[verts] > 0
-        if it % 20 == 19:  # triangles the moves turned over join the constraints
-            near = ctx.faces_of(np.unique(F[Tb]))
-            near = near[~active[near]]
-            active[near[_signed_areas(X, F, near, unit) < 0]] = True
-            T = np.flatnonzero(active)
-        report["iterations"] = it + 1
+    moved, report["iterations"] = _project_folds(ctx, X, F, bad, target, w, iterations)
     out = D0.copy()  # the vertices never moved keep their displacement bit for bit
     out[moved] = X[moved] - V[moved] - B[moved]
     if dtype is not None:
@@ -242,6 +196,83 @@ def unfold(V, F, D, base=None, fixed=None, margin=0.1, iterations=20000, rest_no
     after = int((_signed_areas(V + B + out, F, near, unit) < 0).sum())
     report.update(after=after, vertices=int(moved.sum()), max_change=float(changed.max(initial=0.0)))
     return out, report
+
+
+def _checked(V, F, D):
+    """``V`` (n, 3) and ``D`` (n, 3) as float64, ``F`` (m, 3) as int64 indices of ``V``; an error
+    naming the shapes otherwise."""
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    D0 = np.asarray(D, dtype=np.float64)
+    if V.ndim != 2 or V.shape[1] != 3 or D0.shape != V.shape:
+        raise AutobonesError(f"fold repair: vertices {V.shape} and displacement {D0.shape} must both be (n, 3)")
+    if F.ndim != 2 or F.shape[1] != 3 or (len(F) and (F.min() < 0 or F.max() >= len(V))):
+        raise AutobonesError(f"fold repair: faces {F.shape} must be (m, 3) indices of the {counted(len(V), 'vertex', 'vertices')}")
+    return V, F, D0
+
+
+def _project_folds(ctx, X, F, bad, target, w, iterations):
+    """:func:`unfold`'s projection sweeps on the judged positions ``X`` (n, 3, changed in place),
+    ``F`` (m, 3), starting from the turned-over triangles ``bad`` (m,) bool; ``target`` (m,) the signed area
+    asked of each triangle (input units squared), ``w`` (n,) 1 for a vertex free to move, 0 for
+    a fixed one. Returns which vertices moved (n,) bool and the sweeps that projected."""
+    unit = ctx.unit
+    active = bad.copy()
+    moved = np.zeros(len(X), dtype=bool)
+    T = np.flatnonzero(active)
+    done = 0
+    for it in range(iterations):
+        A = _signed_areas(X, F, T, unit)
+        viol = (A < target[T]) & (active[T] | (A < 0))
+        # done when every constraint is at least half met (a margin against rounding to float32)
+        if not (A < 0.5 * target[T]).any():
+            # nothing left among these: only triangles of moved vertices can have turned since
+            newly = _turned_near(ctx, X, F, active, np.flatnonzero(moved))
+            if not len(newly):
+                break
+            active[newly] = True
+            T = np.flatnonzero(active)
+            continue
+        active[T[viol]] = True
+        Tb = T[viol]
+        verts = _project(X, F, Tb, A[viol], unit, target, w)
+        moved[verts] |= w[verts] > 0
+        if it % 20 == 19:  # triangles the moves turned over join the constraints
+            active[_turned_near(ctx, X, F, active, np.unique(F[Tb]))] = True
+            T = np.flatnonzero(active)
+        done = it + 1
+    return moved, done
+
+
+def _turned_near(ctx, X, F, active, vertices):
+    """Triangles not yet ``active`` (m,) bool, with a corner among ``vertices`` (int array), that
+    are turned over at ``X`` (n, 3) (triangles ``F`` (m, 3)): int array."""
+    near = ctx.faces_of(vertices)
+    near = near[~active[near]]
+    return near[_signed_areas(X, F, near, ctx.unit) < 0]
+
+
+def _project(X, F, Tb, A, unit, target, w):
+    """One Jacobi sweep: each triangle ``Tb`` (int array; signed areas ``A``, same length) moved
+    along its area's gradient by the least that meets its ``target`` (m,), its vertices' moves
+    weighted by ``w`` (n,) and averaged over their triangles; ``X`` (n, 3) changed in place.
+    Returns the vertices touched (sorted, unique)."""
+    x0, x1, x2 = X[F[Tb, 0]], X[F[Tb, 1]], X[F[Tb, 2]]
+    u = unit[Tb]
+    grads = (0.5 * cross_rows(x1 - x2, u), 0.5 * cross_rows(x2 - x0, u), 0.5 * cross_rows(x0 - x1, u))
+    wk = [w[F[Tb, k]] for k in range(3)]
+    den = sum(wc * np.einsum("ij,ij->i", g, g) for wc, g in zip(wk, grads))
+    lam = (target[Tb] - A) / np.maximum(den, 1e-300)
+    verts, local = np.unique(F[Tb], return_inverse=True)
+    local = local.reshape(-1, 3)
+    move = np.zeros((len(verts), 3))
+    cnt = np.bincount(local.ravel(), minlength=len(verts)).astype(np.float64)
+    for k in range(3):
+        step = (wk[k] * lam)[:, None] * grads[k]
+        for c in range(3):
+            move[:, c] += np.bincount(local[:, k], step[:, c], minlength=len(verts))
+    X[verts] += move / cnt[:, None]
+    return verts
 
 
 def unfold_shapes(V, F, deltas, names, fixed=None, **options):

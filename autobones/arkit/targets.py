@@ -336,12 +336,7 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     lm = rig.landmarks or {}
     V, F = np.asarray(rig.vertices, dtype=np.float64), np.asarray(rig.faces, dtype=np.int64)
     t = time.perf_counter()
-    if correspondence is None:
-        P, shared = shape_correspondence(S, V, F, lm, **fit_options)
-    else:
-        P, shared = np.asarray(correspondence, dtype=np.float64), shared_landmarks(S, lm)
-        if P.shape != S.vertices.shape:
-            raise AutobonesError(f"ARKit shapes: {counted(len(P), 'corresponding point')} for the shape set's {counted(len(S.vertices), 'vertex', 'vertices')}")
+    P, shared = _correspondence(S, V, F, lm, correspondence, fit_options)
     tim = {"correspond": time.perf_counter() - t}
     names = S.names
     D = np.stack([S.deltas[n] for n in names])
@@ -349,37 +344,103 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     keep = np.zeros(len(V), dtype=bool)
     for m in eyes.values():
         keep |= m
-    if method == "deformation":
-        X = deformation_targets(S, D, P, V, F, lm, None if eyes else rig.frame, keep=keep, timings=tim,
-                                frame=rig.frame, free_lips=free_lips)
-    elif method == "copy":
-        s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm[n] for n in shared], dtype=np.float64))
-        X = copy_displacements(S.faces, D, P, V, s, R)
-        X[:, keep] = 0.0
-    else:
-        raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
+    X = _carry(S, D, P, V, F, lm, shared, rig.frame, method, eyes, keep, tim, free_lips)
     names = list(names)
     met, apart = {}, {}
     if method == "deformation" and meet_blinks:
-        # the blinks' margins brought together on the head's own lids (the gradients leave them apart)
         t = time.perf_counter()
-        balls = [fit_sphere(V[m]) for m in eyes.values()]
-        blinks, met = meet_lids(V, F, lm, dict(zip(names, X)), eyeballs=balls)
-        X = np.stack([blinks[n] for n in names])
-        apart = {n: r for n, r in met.items() if r["open"] > 1.0 - BLINK_CLOSED}
-        if apart:
-            log.warning("ARKit shapes: %s", lids_note(apart))
+        X, met, apart = _meet_blinks(V, F, lm, X, names, eyes)
         tim["lids"] = tim.get("lids", 0.0) + time.perf_counter() - t
+    t = time.perf_counter()
+    X, fold_report = _repair_folds(V, F, X, names, keep, repair_folds)
+    tim["folds"] = time.perf_counter() - t
+    t = time.perf_counter()
+    by_name = dict(zip(names, X))
+    turned = _turn_eyeballs(rig, V, by_name, eyes)
+    # all 52 names, a name the set lacks all zero; rounded to the float32 the glb stores
+    targets = {n: (np.zeros_like(V) if by_name.get(n) is None else by_name[n]).astype(np.float32).astype(np.float64)
+               for n in ARKIT_NAMES}
+    tim["eyes"] = time.perf_counter() - t
+    t = time.perf_counter()
+    on_top, alone, judged = _fold_counts(V, F, targets, by_name, fold_report, turned)
+    tim["folds"] += time.perf_counter() - t
+    if timings is not None:
+        timings.update(tim)
+    record = _arkit_record(S, method, shared, met, apart, eyes, targets, alone, judged, on_top, repair_folds,
+                           fold_report)
+    _warn_still_folded(judged, record["source_flipped_triangles"])
+    return targets, record
+
+
+def _correspondence(S, V, F, lm, correspondence, fit_options):
+    """The shape set ``S``'s skin on the head (``P`` (n_s, 3), head frame and units) and the
+    landmark names shared: :func:`shape_correspondence`, or the ``correspondence`` given
+    (checked against the set's vertex count)."""
+    if correspondence is None:
+        return shape_correspondence(S, V, F, lm, **fit_options)
+    P, shared = np.asarray(correspondence, dtype=np.float64), shared_landmarks(S, lm)
+    if P.shape != S.vertices.shape:
+        raise AutobonesError(f"ARKit shapes: {counted(len(P), 'corresponding point')} for the shape set's {counted(len(S.vertices), 'vertex', 'vertices')}")
+    return P, shared
+
+
+def _carry(S, D, P, V, F, lm, shared, frame, method, eyes, keep, tim, free_lips):
+    """The set's displacements ``D`` (k, n_s, 3) carried onto the head ``V`` (n, 3), ``F`` (m, 3)
+    (input frame and units) through ``P`` (n_s, 3): deformation transfer
+    (:func:`deformation_targets`; a head without separate ``eyes`` is one surface), or copied
+    through a similarity fit on the ``shared`` landmarks. ``keep`` (n,) bool held at 0; ``tim``
+    takes the transfer's seconds. Returns (k, n, 3) float64."""
+    if method == "deformation":
+        return deformation_targets(S, D, P, V, F, lm, None if eyes else frame, keep=keep, timings=tim,
+                                   frame=frame, free_lips=free_lips)
+    if method == "copy":
+        s, R = similarity(np.array([S.landmarks[n] for n in shared]), np.array([lm[n] for n in shared], dtype=np.float64))
+        X = copy_displacements(S.faces, D, P, V, s, R)
+        X[:, keep] = 0.0
+        return X
+    raise AutobonesError(f"ARKit shapes: unknown method {method!r} (deformation or copy)")
+
+
+def _repair_folds(V, F, X, names, keep, repair_folds):
+    """``X`` (k, n, 3; ``names`` its k ARKit names) rounded to float32 and, with ``repair_folds``,
+    :func:`unfold_shapes`'d (``keep`` (n,) bool never moved). Returns (k, n, 3) float64 and the
+    repair's report per name (empty without the repair)."""
     # triangles a carried shape turns over are turned back, moving only their vertices (mouthClose
     # on top of jawOpen); rounded first to the float32 the glb stores, so the counts are of what is written
-    t = time.perf_counter()
     X = X.astype(np.float32).astype(np.float64)
     fold_report = {}
     if repair_folds:
         X, fold_report = unfold_shapes(V, F, X, names, fixed=keep, dtype=np.float32)
-    tim["folds"] = time.perf_counter() - t
-    t = time.perf_counter()
-    by_name = dict(zip(names, X))
+    return X, fold_report
+
+
+def _warn_still_folded(judged, src):
+    """Log the shapes that turn more triangles over (``judged``: name -> count) than the source's
+    own (``src``: name -> count)."""
+    bad = {n: c for n, c in judged.items() if c > src.get(n, 0)}
+    if bad:  # ICT's own shapes fold some (mouthClose): only more than the source's is news
+        log.warning("ARKit shapes: triangles still turned over at weight 1 after the fold repair: %s",
+                    ", ".join(f"{n} {c} (source {src.get(n, 0)})" for n, c in bad.items()))
+
+
+def _meet_blinks(V, F, lm, X, names, eyes):
+    """The blinks of ``X`` (k, n, 3; ``names`` their k names) with their lid margins brought
+    together on the head's own lids (:func:`meet_lids`; the gradients leave them apart), the
+    separate eyeballs ``eyes`` (name -> (n,) bool) as spheres. Returns the new (k, n, 3), the
+    per-blink record and the blinks left apart."""
+    balls = [fit_sphere(V[m]) for m in eyes.values()]
+    blinks, met = meet_lids(V, F, lm, dict(zip(names, X)), eyeballs=balls)
+    X = np.stack([blinks[n] for n in names])
+    apart = {n: r for n, r in met.items() if r["open"] > 1.0 - BLINK_CLOSED}
+    if apart:
+        log.warning("ARKit shapes: %s", lids_note(apart))
+    return X, met, apart
+
+
+def _turn_eyeballs(rig, V, by_name, eyes):
+    """Set each eyeLook* shape of ``by_name`` (name -> (n, 3), changed in place) on the separate
+    eyeballs ``eyes`` (``eye_l``/``eye_r`` -> (n,) bool) to their rigid turn about their eye bone
+    (:func:`eye_turn`). Returns the names turned."""
     turned = set()
     if eyes:
         names_b = rig.skeleton.names
@@ -392,13 +453,14 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
                 by_name[name] = by_name[name].copy()
                 by_name[name][m] = (V[m] - c) @ R.T + c - V[m]
                 turned.add(name)
-    targets = {}
-    for name in ARKIT_NAMES:
-        d = by_name.get(name)
-        d = np.zeros_like(V) if d is None else d
-        targets[name] = d.astype(np.float32).astype(np.float64)
-    tim["eyes"] = time.perf_counter() - t
-    t = time.perf_counter()
+    return turned
+
+
+def _fold_counts(V, F, targets, by_name, fold_report, turned):
+    """Triangles each of the 52 ``targets`` (name -> (n, 3)) turns over at weight 1: the shapes
+    driven on top of another (:data:`ON_TOP`, both in ``by_name``), each shape alone, and as judged
+    (alone, but on top of its base for those). Counts the fold repair made (``fold_report``) are
+    reused unless an eyeball turn (``turned``) changed the shape since."""
     # each shape alone, as ever; a shape meant on top of another (mouthClose) also judged that way.
     # The fold repair counted every other shape as written (unless an eyeball turn changed it since)
     on_top = {n: b for n, b in ON_TOP.items() if n in by_name and b in by_name}
@@ -409,10 +471,12 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
     for n, b in on_top.items():
         judged[n] = (fold_report[n]["after"] if n in fold_report else
                      int(folded_triangles(V, F, targets[n], targets[b]).sum()))
-    tim["folds"] += time.perf_counter() - t
-    if timings is not None:
-        timings.update(tim)
-    record = {
+    return on_top, alone, judged
+
+
+def _arkit_record(S, method, shared, met, apart, eyes, targets, alone, judged, on_top, repair_folds, fold_report):
+    """The sidecar's record of the ARKit shapes (see :func:`arkit_targets`)."""
+    return {
         "format": "autobones-arkit/1",
         "names": list(ARKIT_NAMES),
         "source": S.meta.get("source"),
@@ -442,9 +506,3 @@ def arkit_targets(rig, shapes=None, method="deformation", timings=None, repair_f
         },
         "max_displacement": {n: float(np.linalg.norm(targets[n], axis=1).max(initial=0.0)) for n in ARKIT_NAMES},
     }
-    src = record["source_flipped_triangles"]
-    bad = {n: c for n, c in judged.items() if c > src.get(n, 0)}
-    if bad:  # ICT's own shapes fold some (mouthClose): only more than the source's is news
-        log.warning("ARKit shapes: triangles still turned over at weight 1 after the fold repair: %s",
-                    ", ".join(f"{n} {c} (source {src.get(n, 0)})" for n, c in bad.items()))
-    return targets, record

@@ -249,27 +249,7 @@ def build_stage(src, meters_per_unit=None, max_influences=None):
     skel.CreateBindTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.world]))
     skel.CreateRestTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m.T.tolist()) for m in src.local]))
 
-    mesh = UsdGeom.Mesh.Define(stage, "/Rig/Mesh")
-    F = np.asarray(rig.faces, dtype=np.int32)
-    # the last line of defence (issue #33): nothing non-finite reaches the stage, whatever the rig holds; a
-    # value past float32's range is named by the check, not warned of by numpy
-    with np.errstate(over="ignore"):
-        V = np.asarray(rig.vertices, dtype=np.float32)
-        finite_output(None, "the USD stage", ("points (float32)", V),
-                      *((f"blend shape {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in src.morph_targets),
-                      *((f"animation {a.name}", x) for a in src.animations
-                        for x in (a.times, a.translations, a.rotations, a.scales)
-                        if x is not None),
-                      *((f"animation {a.name} weights (float32)", np.asarray(a.morph_weights, dtype=np.float32))
-                        for a in src.animations if a.morph_weights is not None))
-    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(V)))
-    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(F), 3, dtype=np.int32)))
-    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(F.ravel())))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # triangles as they are, no Catmull-Clark
-    mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)  # glTF's counter-clockwise front faces
-    lo, hi = (V.min(axis=0), V.max(axis=0)) if len(V) else (np.zeros(3), np.zeros(3))
-    mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
-
+    mesh = _define_mesh(stage, src, Gf, UsdGeom, Vt)
     binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
     binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
     idx, w = all_influences(skin_weights(rig.weights, max_influences))
@@ -293,23 +273,56 @@ def build_stage(src, meters_per_unit=None, max_influences=None):
         binding.CreateBlendShapeTargetsRel().SetTargets(targets)
 
     if src.animations:
-        UsdGeom.Scope.Define(stage, "/Rig/Animations")
-        anims = unique_identifiers([a.name for a in src.animations])
-        fps = _frame_rate(np.concatenate([a.times for a in src.animations]))
-        stage.SetTimeCodesPerSecond(fps)
-        stage.SetFramesPerSecond(fps)
-        first = None
-        for ident, a in zip(anims, src.animations):
-            prim = write_animation(stage, f"/Rig/Animations/{ident}", paths, a.times * fps, a.translations,
-                                   a.rotations, a.scales,
-                                   None if a.morph_weights is None else shape_names, a.morph_weights)
-            prim.GetPrim().SetCustomDataByKey("autobones:name", a.name)
-            first = first or prim
-        all_t = np.concatenate([a.times for a in src.animations]) * fps
-        stage.SetStartTimeCode(float(all_t.min()))
-        stage.SetEndTimeCode(float(all_t.max()))
-        UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([first.GetPath()])
+        _define_animations(stage, skel, src.animations, paths, shape_names, UsdGeom, UsdSkel)
     return stage
+
+
+def _define_mesh(stage, src, Gf, UsdGeom, Vt):
+    """``/Rig/Mesh``: the rig's triangles and vertices (n, 3) as float32 (input frame and units), after
+    refusing anything non-finite the stage would carry."""
+    rig = src.rig
+    mesh = UsdGeom.Mesh.Define(stage, "/Rig/Mesh")
+    F = np.asarray(rig.faces, dtype=np.int32)
+    # the last line of defence (issue #33): nothing non-finite reaches the stage, whatever the rig holds; a
+    # value past float32's range is named by the check, not warned of by numpy
+    with np.errstate(over="ignore"):
+        V = np.asarray(rig.vertices, dtype=np.float32)
+        finite_output(None, "the USD stage", ("points (float32)", V),
+                      *((f"blend shape {n} (float32)", np.asarray(d, dtype=np.float32)) for n, d in src.morph_targets),
+                      *((f"animation {a.name}", x) for a in src.animations
+                        for x in (a.times, a.translations, a.rotations, a.scales)
+                        if x is not None),
+                      *((f"animation {a.name} weights (float32)", np.asarray(a.morph_weights, dtype=np.float32))
+                        for a in src.animations if a.morph_weights is not None))
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(V)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(F), 3, dtype=np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.ascontiguousarray(F.ravel())))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # triangles as they are, no Catmull-Clark
+    mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)  # glTF's counter-clockwise front faces
+    lo, hi = (V.min(axis=0), V.max(axis=0)) if len(V) else (np.zeros(3), np.zeros(3))
+    mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
+    return mesh
+
+
+def _define_animations(stage, skel, animations, paths, shape_names, UsdGeom, UsdSkel):
+    """A ``SkelAnimation`` per animation under ``/Rig/Animations``, key times (s) in time codes of one
+    frame rate (:func:`_frame_rate`); the first drives ``skel``. ``paths``: the joint paths."""
+    UsdGeom.Scope.Define(stage, "/Rig/Animations")
+    anims = unique_identifiers([a.name for a in animations])
+    fps = _frame_rate(np.concatenate([a.times for a in animations]))
+    stage.SetTimeCodesPerSecond(fps)
+    stage.SetFramesPerSecond(fps)
+    first = None
+    for ident, a in zip(anims, animations):
+        prim = write_animation(stage, f"/Rig/Animations/{ident}", paths, a.times * fps, a.translations,
+                               a.rotations, a.scales,
+                               None if a.morph_weights is None else shape_names, a.morph_weights)
+        prim.GetPrim().SetCustomDataByKey("autobones:name", a.name)
+        first = first or prim
+    all_t = np.concatenate([a.times for a in animations]) * fps
+    stage.SetStartTimeCode(float(all_t.min()))
+    stage.SetEndTimeCode(float(all_t.max()))
+    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([first.GetPath()])
 
 
 def write_animation(stage, path, joints, time_codes, translations, rotations, scales, shapes=None, shape_weights=None):

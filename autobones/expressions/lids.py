@@ -136,36 +136,57 @@ def lid_hinges(V, skin, landmarks, eyes, fu, lid, surface):
     axes = np.tile([1.0, 0.0, 0.0], (2, 1))
     close = np.zeros(2)
     share = np.zeros((2, n))
-    band = float(lid.get("hinge_band", 0.0))
     for e, s in enumerate("lr"):
         c = eyes.get(s)
         if c is None:
             continue
         points[e] = c
-        need = [f"{b}_{s}" for b in ("exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius")]
-        if str(lid.get("hinge", "pivot")) != "corners" or not all(k in landmarks for k in need[:2]):
-            continue
-        corners = eye_corners(landmarks, c, s, fu)   # the palpebrale points placed when missing
-        ex, medial = np.asarray(corners[0], dtype=np.float64), np.array(corners[1], dtype=np.float64)
-        if all(k in landmarks for k in need[2:]):
-            medial[1] += float(lid.get("hinge_medial_height", 0.0)) * (0.5 * (corners[2][1] + corners[3][1]) - medial[1])
-        u = ex - medial
-        norm = float(np.linalg.norm(u))
-        if not np.isfinite(norm) or norm <= 1e-6 * fu:
-            continue
-        u = u / norm if u[0] >= 0 else -u / norm
-        points[e], axes[e] = ex, u
-        close[e] = closing_angle(corners[2], corners[3], ex, u)
-        if band > 0:
-            s_up, gap = fissure_height(V, corners, fu, corners[2])
-            s_lo, _ = fissure_height(V, corners, fu, corners[3])
-            outside = np.maximum(s_up, 0.0) + np.maximum(-s_lo, 0.0)     # 0 between the margins
-            # the eye's own skin: as far from its centre as the lid weights reach, in front of the pivot
-            half = 0.5 * abs(ex[0] - corners[1][0])
-            near = ((np.abs(V[:, 0] - 0.5 * (ex[0] + corners[1][0])) < float(lid["width_margin"]) * half)
-                    & (V[:, 2] > c[2]))
-            share[e] = ramp(outside, band * gap, 0.0) * near * skin
-    share = share.max(axis=0)
+        hinge = _corner_hinge(V, skin, landmarks, c, s, fu, lid)
+        if hinge is not None:
+            points[e], axes[e], close[e], share[e] = hinge
+    share = _spread_share(share.max(axis=0), skin, fu, lid, surface)
+    lower = bool(lid.get("hinge_lower", False))
+    return points, axes, close, share, np.array([True, True, lower, lower])
+
+
+def _corner_hinge(V, skin, landmarks, c, s, fu, lid):
+    """One eye's hinge on the line through its corners (see :func:`lid_hinges`), or None when it
+    has none (``lid["hinge"]`` not "corners", a corner landmark missing, the corners together).
+
+    ``V`` (n, 3), ``skin`` (n,) bool, ``landmarks`` name -> (3,), ``c`` (3,) the eye pivot, all
+    canonical, head sizes; ``s`` the side (``l``/``r``). Returns the hinge's point (3,) (the
+    exocanthion), its unit axis (3,) toward +X, the closing turn (degrees) and the hinge's
+    undiffused share (n,) (0 everywhere when ``lid["hinge_band"]`` is 0).
+    """
+    need = [f"{b}_{s}" for b in ("exocanthion", "endocanthion", "palpebrale_superius", "palpebrale_inferius")]
+    if str(lid.get("hinge", "pivot")) != "corners" or not all(k in landmarks for k in need[:2]):
+        return None
+    corners = eye_corners(landmarks, c, s, fu)   # the palpebrale points placed when missing
+    ex, medial = np.asarray(corners[0], dtype=np.float64), np.array(corners[1], dtype=np.float64)
+    if all(k in landmarks for k in need[2:]):
+        medial[1] += float(lid.get("hinge_medial_height", 0.0)) * (0.5 * (corners[2][1] + corners[3][1]) - medial[1])
+    u = ex - medial
+    norm = float(np.linalg.norm(u))
+    if not np.isfinite(norm) or norm <= 1e-6 * fu:
+        return None
+    u = u / norm if u[0] >= 0 else -u / norm
+    share = np.zeros(len(V))
+    band = float(lid.get("hinge_band", 0.0))
+    if band > 0:
+        s_up, gap = fissure_height(V, corners, fu, corners[2])
+        s_lo, _ = fissure_height(V, corners, fu, corners[3])
+        outside = np.maximum(s_up, 0.0) + np.maximum(-s_lo, 0.0)     # 0 between the margins
+        # the eye's own skin: as far from its centre as the lid weights reach, in front of the pivot
+        half = 0.5 * abs(ex[0] - corners[1][0])
+        near = ((np.abs(V[:, 0] - 0.5 * (ex[0] + corners[1][0])) < float(lid["width_margin"]) * half)
+                & (V[:, 2] > c[2]))
+        share = ramp(outside, band * gap, 0.0) * near * skin
+    return ex, u, closing_angle(corners[2], corners[3], ex, u), share
+
+
+def _spread_share(share, skin, fu, lid, surface):
+    """The hinge's share (n,) in [0, 1] diffused over the skin as the lid weights are (over
+    ``lid["smoothing"]`` fu; ``surface`` a :class:`SkinSurface`), then rescaled to its peak."""
     t_l = (float(lid["smoothing"]) * fu) ** 2
     if t_l > 0 and share.any():
         peak = share.max()
@@ -173,8 +194,7 @@ def lid_hinges(V, skin, landmarks, eyes, fu, lid, surface):
         # back to a full share on the margins (the diffusion lowers the peak)
         share = np.clip(share * (peak / max(share.max(), 1e-12)), 0.0, 1.0) * skin
         share[share < 1e-3] = 0.0            # the diffusion reaches the whole skin: keep to the lids
-    lower = bool(lid.get("hinge_lower", False))
-    return points, axes, close, share, np.array([True, True, lower, lower])
+    return share
 
 
 def eye_lid_weights(V, skin, centre, corners, gap_to_skin, fu, lid):

@@ -27,11 +27,12 @@ tissue (the lips, whose inner surfaces face each other, the eyelids, scalp and n
 tissue's correction by a harmonic extension that fades out past its border; and no skin triangle
 the wires leave the right way up is turned over.
 
+The layered mesh itself (which skin carries tissue, the node layers, the springs, the prisms'
+volumes) is built by :mod:`.tissue_mesh`; this module solves it.
+
 Everything is canonical (+Y up, +Z front, head sizes), like :class:`~autobones.expressions.model.ExpressionModel`.
 """
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -39,46 +40,8 @@ from scipy.sparse.csgraph import dijkstra
 
 from ..errors import AutobonesError
 from ..geometry.laplacian import factor_spd, laplacian
-from ..geometry.normals import cross_rows, triangle_normals
-from ..geometry.topology import mesh_edges
-
-
-@dataclass
-class _Springs:
-    """Springs between nodes ``a`` and ``b`` (s,) with rest lengths ``rest`` (s,) and weights
-    ``weight`` (s,); ``limit`` (s,) the deformation ratio past which the second phase's extra
-    weight ``weight2`` (s,) acts (inf: one phase)."""
-
-    a: np.ndarray
-    b: np.ndarray
-    rest: np.ndarray
-    weight: np.ndarray
-    limit: np.ndarray
-    weight2: np.ndarray
-
-
-def _prism_tets(top, bottom):
-    """The three tetrahedra (3, 4) of node-index arrays that split prisms ``top`` (e, 3) over
-    ``bottom`` (e, 3) (bottom[:, k] under top[:, k]); each tet as (e, 4)."""
-    a, b, c = top.T
-    a_, b_, c_ = bottom.T
-    return [np.stack(t, axis=1) for t in ((a, b, c, a_), (b, c, a_, b_), (c, a_, b_, c_))]
-
-
-def prism_volumes(X, top, bottom):
-    """Volumes (e,) of prisms with corners ``X[top]`` over ``X[bottom]`` (``X`` (N, 3)).
-
-    Positive when the top triangle's normal (right hand, corners in order) points away from
-    the bottom; each prism is the sum of its three tetrahedra, so the sum over prisms sharing
-    faces is the volume they fill.
-    """
-    vol = np.zeros(len(top))
-    for t in _prism_tets(top, bottom):
-        p0 = X[t[:, 0]]
-        vol += (cross_rows(X[t[:, 1]] - p0, X[t[:, 2]] - p0) * (X[t[:, 3]] - p0)).sum(axis=1)
-    # (a, b, c, a') with a' below an outward (a, b, c) is negative: flip to a positive volume
-    return -vol / 6.0
-
+from ..geometry.normals import triangle_normals
+from .tissue_mesh import area_shares, layer_areas, layer_nodes, layer_springs, prism_volumes, tissue_triangles
 
 class TissueModel:
     """The layered tissue of Lee, Terzopoulos & Waters 1995 on one fitted expression model.
@@ -184,37 +147,9 @@ class TissueModel:
         if not 0.0 < float(self.dermal_fraction) < 1.0:
             raise AutobonesError(f"tissue: dermal_fraction must lie in (0, 1), got {self.dermal_fraction}")
         surf = model.surface_
-        first = surf.first
-        # skin facing out of the head (not skin that faces into it: the mouth's lining)
-        where = model.skin_ & ~model.mouth_["inward"]
-        if model.region_ is not None and self.regions is not None:
-            keep = [i for i, name in enumerate(model.region_labels_) if name in set(self.regions)]
-            where &= np.isin(model.region_, keep)
-        in_tissue = np.zeros(len(surf.vertices), dtype=bool)
-        in_tissue[surf.index[where]] = True
-        Fs = surf.skin_faces
-        # no element across the mouth line (with the lips among the regions: they part there)
-        upper = np.zeros(len(surf.vertices), dtype=np.int8)
-        zone = np.zeros(len(surf.vertices))
-        upper[surf.index] = model.mouth_["upper"] > 0.5
-        zone[surf.index] = model.mouth_["zone"]
-        across = (np.ptp(upper[Fs], axis=1) != 0) & (zone[Fs] >= 0.05).any(axis=1)
-        Fe = Fs[in_tissue[Fs].all(axis=1) & ~across]
-        if len(Fe) == 0:
-            raise AutobonesError("tissue: no skin of the tissue's regions on this head (no triangle whose corners "
-                                 f"all lie in {', '.join(self.regions or ())} and face out of the head)")
-        cols, Fc = np.unique(Fe, return_inverse=True)
-        Fc = Fc.reshape(-1, 3)
+        cols, Fc, E0, Ns, T, X0 = layer_nodes(model, tissue_triangles(model, self.regions), self.dermal_fraction)
         nc = len(cols)
-        E0 = surf.vertices[cols]
-        Ns = model.skull_normals_[first[cols]]
-        T = np.maximum(model.thickness_[first[cols]], 1e-9)
-        # wind every element so that its normal points out of the head (away from the skull)
-        n_e = triangle_normals(E0, Fc)
-        flip = (n_e * Ns[Fc].sum(axis=1)).sum(axis=1) < 0
-        Fc[flip] = Fc[flip][:, [0, 2, 1]]
         df = float(self.dermal_fraction)
-        X0 = np.concatenate([E0, E0 - Ns * (df * T)[:, None], E0 - Ns * T[:, None]])
 
         # every column is solved for, the tissue's border too; the skin beyond it takes the
         # tissue's correction fading out over ``blend`` face units, so no step opens there
@@ -222,38 +157,9 @@ class TissueModel:
         self._skin_faces, self._skin_rest_normals = surf.skin_faces, surf.rest_normals
         self._skin_adjacency = surf.adjacency
 
-        # per-area shares: each triangle's area split among its corners and its edges
-        area = 0.5 * np.linalg.norm(triangle_normals(E0, Fc), axis=1)
-        col_area = np.bincount(Fc.ravel(), weights=np.repeat(area / 3.0, 3), minlength=nc)
-        edges = mesh_edges(Fc)
-        ekey = edges[:, 0] * nc + edges[:, 1]
-        fe = np.sort(np.concatenate([Fc[:, [0, 1]], Fc[:, [1, 2]], Fc[:, [2, 0]]]), axis=1)
-        e_of = np.searchsorted(ekey, fe[:, 0] * nc + fe[:, 1])
-        edge_area = np.bincount(e_of, weights=np.tile(area / 3.0, 3), minlength=len(edges))
-
-        springs = []
-
-        def add(a, b, share, k, limit=np.inf, k2=0.0):
-            rest = np.linalg.norm(X0[a] - X0[b], axis=1)
-            ok = rest > 1e-12
-            a, b, rest, share = a[ok], b[ok], rest[ok], share[ok]
-            springs.append((a, b, rest, float(k) * share / rest**2, np.full(len(a), float(limit)),
-                            float(k2) * share / rest**2))
-
-        i, j = edges[:, 0], edges[:, 1]
-        cidx = np.arange(nc)
-        k1, k2 = (float(v) for v in self.dermal)
-        lim = 1.0 + float(self.biphasic)
-        # skin and fascia resist stretch but give under compression (they wrinkle instead):
-        # a tenth of the stiffness below the rest length
-        soft = float(self.compression)
-        add(i, j, edge_area, soft * self.epidermis, 1.0, (1.0 - soft) * self.epidermis)          # epidermis
-        add(nc + i, nc + j, edge_area, soft * self.fascia, 1.0, (1.0 - soft) * self.fascia)      # fascia
-        for top, bottom, k, ph2 in ((0, nc, k1, k2 - k1), (nc, 2 * nc, float(self.muscle_layer), 0.0)):
-            limit = lim if ph2 > 0 else np.inf
-            add(top + cidx, bottom + cidx, col_area, k, limit, ph2)                    # vertical
-            add(top + i, bottom + j, 0.5 * edge_area, k, limit, ph2)                   # crossed
-            add(top + j, bottom + i, 0.5 * edge_area, k, limit, ph2)
+        col_area, edges, edge_area = area_shares(E0, Fc)
+        springs = layer_springs(X0, edges, col_area, edge_area, self.epidermis, self.fascia, self.muscle_layer,
+                                self.dermal, self.biphasic, self.compression)
         # skin resists bending: a squeezed patch bulges over a few tissue thicknesses, not column
         # by column; the height a squeeze asks for is spread by heat diffusion over ``spread``
         # median thicknesses (one implicit step, factorised once)
@@ -261,14 +167,14 @@ class TissueModel:
         t = (float(self.spread) * float(np.median(T))) ** 2
         self._spread_mass = Mc.tocsr()
         self._spread_solve = factor_spd((Mc + t * Lc).tocsc())
-        self.springs_ = _Springs(*(np.concatenate([s[m] for s in springs]) for m in range(6)))
+        self.springs_ = springs
 
         # prisms: the dermal-fatty layer over the fascia, the muscle layer over the skull; each
         # keeps its volume through the height of its columns (true layer area x height)
         self.prism_top_ = np.concatenate([Fc, nc + Fc])
         self.prism_bottom_ = np.concatenate([nc + Fc, 2 * nc + Fc])
         self.elements_ = Fc
-        self.layer_rest_area_ = np.stack([self._layer_areas(X0, Fc, layer) for layer in range(3)])
+        self.layer_rest_area_ = np.stack([layer_areas(X0, Fc, layer) for layer in range(3)])
         self.layer_height_ = np.stack([df * T, (1.0 - df) * T])
         self.column_weight_ = float(self.volume) * col_area / self.layer_height_**2    # (2, c)
 
@@ -287,18 +193,6 @@ class TissueModel:
         """Unit mean column direction (e, 3) of each element's corners, from ``up`` (c, 3)."""
         u = up[self.elements_].sum(axis=1)
         return u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
-
-    @staticmethod
-    def _layer_areas(X, Fc, layer, across=None):
-        """Area (c,) around each column in node layer ``layer`` of ``X`` (3c, 3): a third of each
-        element's area at that layer; with ``across`` (e, 3), the unit mean column direction at
-        its corners (:meth:`_across`), that area projected on the plane normal to it (area times
-        height along the columns is then the volume however the layers tilt: the pressure's
-        measure)."""
-        nc = len(X) // 3
-        n = triangle_normals(X[layer * nc:(layer + 1) * nc], Fc)
-        a = 0.5 * np.linalg.norm(n, axis=1) if across is None else 0.5 * np.abs(np.einsum("ij,ij->i", n, across))
-        return np.bincount(Fc.ravel(), weights=np.repeat(a / 3.0, 3), minlength=nc)
 
     def _factorise(self):
         """The global step's matrix over epidermis and fascia, factorised once, and the sparse
@@ -394,10 +288,11 @@ class TissueModel:
     def _pressure(self, X, weight, normal, across, passes=2):
         """Raise the epidermis of ``X`` (3c, 3, changed in place) along ``normal`` (c, 3) until the
         tissue's total volume is back to rest, each column by its share of ``weight`` (c,) times
-        its area (``across``: see :meth:`_layer_areas`). Returns the rise per column (c,)."""
+        its area (``across``: see :func:`~autobones.expressions.tissue_mesh.layer_areas`). Returns the
+        rise per column (c,)."""
         nc = len(self.columns_)
         rise = np.zeros(nc)
-        area = self._layer_areas(X, self.elements_, 0, across)
+        area = layer_areas(X, self.elements_, 0, across)
         denom = float((weight * area).sum())
         if denom <= 0.0:
             return rise
@@ -443,28 +338,67 @@ class TissueModel:
         if not hasattr(self, "_solve"):
             raise AutobonesError("TissueModel: call fit(model) before refine")
         cols, nc = self.columns_, len(self.columns_)
-        T, Fc, s = self.thickness_, self.elements_, self.springs_
+        T = self.thickness_
         wire = np.asarray(posed, dtype=np.float64)
         P = wire[cols]
-        R = np.asarray(rotation, dtype=np.float64)[cols]
+        moved = np.asarray(offset, dtype=np.float64)[cols]
+        normal, skull, drive = self._posed_columns(P, moved, np.asarray(rotation, dtype=np.float64)[cols])
+        X = np.concatenate([P, drive, skull])
+        step = self._local_global(X, P, normal, skull, drive)
+        x, it = _anderson(step, X[:2 * nc].copy(), np.concatenate([T, T]) ** 2, int(self.iterations),
+                          float(self.tolerance), int(self.acceleration))
+        X[:2 * nc] = x
+        # no column is pushed or pulled further than its own thickness from where the wires put
+        # it: a fold the wires squeeze in (a jaw turned against the neck) bulges, but no more
+        if self.reach is not None:
+            corr = X[:2 * nc] - np.concatenate([P, drive])
+            size = np.linalg.norm(corr, axis=1)
+            limit = float(self.reach) * np.concatenate([T, T])
+            X[:2 * nc] -= corr * (1.0 - np.minimum(1.0, limit / np.maximum(size, 1e-300)))[:, None]
+        skin, keep = self._skin(X, wire, P, moved, normal)
+        # skull non-penetration, exactly, last: what is still inside goes out along the skull normal
+        skull2, up2 = np.concatenate([skull, skull]), np.concatenate([normal, normal])
+        X[:nc] = skin[cols]
+        X[:2 * nc] -= np.minimum(np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2), 0.0)[:, None] * up2
+        skin[cols] = X[:nc]
+        kept = int((keep < 1.0).sum())
+        depth = np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2)
+        info = {"iterations": it, "nodes": X, "kept_wire": kept,
+                "volume": float(prism_volumes(X, self.prism_top_, self.prism_bottom_).sum() / self.rest_volume_),
+                "depth": float(depth.min())}
+        return skin, info
+
+    def _posed_columns(self, P, moved, R):
+        """Where the columns stand in a pose: their unit direction (c, 3) turned by the bones'
+        rotations ``R`` (c, 3, 3), the skull nodes (c, 3) carried by the bones' offsets ``moved``
+        (c, 3), and where the wires carry each fascia node (c, 3): under the posed skin ``P``
+        (c, 3) at its rest depth, never inside the skull. Canonical, head sizes."""
+        T = self.thickness_
+        nc = len(P)
         # the columns turn with the bones but keep their depth: a blend of the jaw's turn and
         # the head's (linear blend skinning) would shorten them
         normal = np.einsum("nij,nj->ni", R, self.skull_normals_)
         normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
-        skull = self.rest_nodes_[:nc] + np.asarray(offset, dtype=np.float64)[cols] - normal * T[:, None]
+        skull = self.rest_nodes_[:nc] + moved - normal * T[:, None]
         # where the wires carry each fascia node (never inside the skull)
         drive = P - normal * (float(self.dermal_fraction) * T)[:, None]
         drive -= np.minimum(np.einsum("ij,ij->i", drive - skull, normal), 0.0)[:, None] * normal
-        X = np.concatenate([P, drive, skull])
+        return normal, skull, drive
+
+    def _local_global(self, X, P, normal, skull, drive):
+        """The local/global iteration of a pose as a function of epidermis and fascia (2c, 3):
+        ``X`` (3c, 3) the nodes (its first 2c rows overwritten by each step), ``P`` (c, 3) the
+        wires' skin, ``normal`` (c, 3) the posed column directions, ``skull`` and ``drive`` (c, 3)
+        from :meth:`_posed_columns`."""
+        nc = len(P)
+        Fc, s = self.elements_, self.springs_
         const = -(self._coupling @ skull)
         const[:nc] += self.rest_weight_[:, None] * P
         up2 = np.concatenate([normal, normal])                 # each free node's column direction
         skull2 = np.concatenate([skull, skull])
         contact = np.concatenate([self.contact_weight_, self.contact_weight_])[:, None]
         drive_w = self.drive_weight_[:, None]
-        T2 = np.concatenate([T, T]) ** 2
         area_rest = self.layer_rest_area_[:2]
-        across = self._across(normal)
         up_s = np.where((s.a // nc != s.b // nc)[:, None], normal[s.a % nc], 0.0)   # springs between layers
         S = sp.hstack([self._spring_rhs, self._spring2_rhs, self._column_rhs]).tocsr()
 
@@ -481,7 +415,7 @@ class TissueModel:
             p1 = s.rest[:, None] * u
             p2 = np.minimum(length, s.limit * s.rest)[:, None] * u
             # each layer's column keeps area x height: squeezed sideways, it grows taller
-            a0, a1 = self._layer_areas(X, Fc, 0), self._layer_areas(X, Fc, 1)
+            a0, a1 = layer_areas(X, Fc, 0), layer_areas(X, Fc, 1)
             squeeze = np.log(np.clip(area_rest / np.maximum(np.stack([a0, a1]), 1e-300), 0.5, 2.0))
             ratio = np.exp(self._spread_solve(self._spread_mass @ squeeze.T).T)
             v = np.concatenate([X[:nc] - X[nc:2 * nc], X[nc:2 * nc] - X[2 * nc:]])
@@ -493,47 +427,22 @@ class TissueModel:
             rhs[nc:] += drive_w * along
             return self._solve(rhs)
 
-        # Anderson acceleration of the fixed-point iteration (Peng, Deng, Zhang & Zhang 2018): the
-        # next point mixes the last few steps; a step whose residual grows restarts the history
-        x = X[:2 * nc].copy()
-        hist_g, hist_f, prev = [], [], None
-        best, it = np.inf, 0
-        for it in range(1, int(self.iterations) + 1):
-            g = step(x)
-            f = g - x
-            step2 = np.einsum("ij,ij->i", f, f)          # each node's squared step, read twice
-            if np.sqrt(np.mean(step2 / T2)) <= float(self.tolerance):
-                x = g
-                break
-            res = float(np.sqrt(step2.sum()))
-            if res > best:
-                hist_g, hist_f, prev = [], [], None
-            best = min(best, res)
-            if prev is not None and int(self.acceleration) > 0:
-                hist_g.append((g - prev[0]).ravel())
-                hist_f.append((f - prev[1]).ravel())
-                if len(hist_g) > int(self.acceleration):
-                    del hist_g[0], hist_f[0]
-            prev = (g, f)
-            if hist_f:
-                gamma = np.linalg.lstsq(np.stack(hist_f, axis=1), f.ravel(), rcond=None)[0]
-                x = g - (np.stack(hist_g, axis=1) @ gamma).reshape(g.shape)
-            else:
-                x = g
-        X[:2 * nc] = x
-        # no column is pushed or pulled further than its own thickness from where the wires put
-        # it: a fold the wires squeeze in (a jaw turned against the neck) bulges, but no more
-        if self.reach is not None:
-            corr = X[:2 * nc] - np.concatenate([P, drive])
-            size = np.linalg.norm(corr, axis=1)
-            limit = float(self.reach) * np.concatenate([T, T])
-            X[:2 * nc] -= corr * (1.0 - np.minimum(1.0, limit / np.maximum(size, 1e-300)))[:, None]
+        return step
+
+    def _skin(self, X, wire, P, moved, normal):
+        """The posed skin (nw, 3) from the solved nodes ``X`` (3c, 3, its epidermis changed in
+        place) and the wires' skin ``wire`` (nw, 3; ``P`` (c, 3) at the columns), with the
+        tissue's volume restored as a pressure, its correction carried past the border and nothing
+        turned over that the wires left upright; and the fraction (nw,) of the correction each
+        vertex kept. ``moved`` (c, 3): the bones' offsets at the columns; ``normal`` (c, 3)."""
+        cols, nc = self.columns_, len(self.columns_)
+        across = self._across(normal)
         # the tissue as a whole is incompressible: the volume the columns' own terms leave (their
         # stiffness against the drive, a fold held back) is taken up as a pressure on the skin the
         # pose moves, each column's epidermis rising along its normal in proportion to its motion
-        motion = (np.linalg.norm(P - self.rest_nodes_[:nc] - np.asarray(offset, dtype=np.float64)[cols], axis=1)
+        motion = (np.linalg.norm(P - self.rest_nodes_[:nc] - moved, axis=1)
                   + np.linalg.norm(X[:nc] - P, axis=1))
-        rise = self._pressure(X, motion, normal, across)
+        self._pressure(X, motion, normal, across)
         # the skin: the columns' epidermis, the correction carried past the border, then nothing
         # turned over that the wires left upright
         skin = wire.copy()
@@ -550,13 +459,37 @@ class TissueModel:
             more[self._ext_vertices] += self._extend((rise * whole)[:, None] * normal)
             if np.all(self._upright(more) | ~self._upright(wire)):
                 skin = more
-        # skull non-penetration, exactly, last: what is still inside goes out along the skull normal
-        X[:nc] = skin[cols]
-        X[:2 * nc] -= np.minimum(np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2), 0.0)[:, None] * up2
-        skin[cols] = X[:nc]
-        kept = int((keep < 1.0).sum())
-        depth = np.einsum("ij,ij->i", X[:2 * nc] - skull2, up2)
-        info = {"iterations": it, "nodes": X, "kept_wire": kept,
-                "volume": float(prism_volumes(X, self.prism_top_, self.prism_bottom_).sum() / self.rest_volume_),
-                "depth": float(depth.min())}
-        return skin, info
+        return skin, keep
+
+
+def _anderson(step, x, scale2, iterations, tolerance, acceleration):
+    """The fixed point of ``step`` from ``x`` (k, 3), with Anderson acceleration (Peng, Deng, Zhang &
+    Zhang 2018): the next point mixes the last ``acceleration`` steps; a step whose residual grows
+    restarts the history. Stops after ``iterations`` or once the steps, each row's over its
+    ``scale2`` (k,) (squared), have a root mean square at most ``tolerance``. Returns the point
+    and the iterations run."""
+    hist_g, hist_f, prev = [], [], None
+    best, it = np.inf, 0
+    for it in range(1, iterations + 1):
+        g = step(x)
+        f = g - x
+        step2 = np.einsum("ij,ij->i", f, f)          # each node's squared step, read twice
+        if np.sqrt(np.mean(step2 / scale2)) <= tolerance:
+            x = g
+            break
+        res = float(np.sqrt(step2.sum()))
+        if res > best:
+            hist_g, hist_f, prev = [], [], None
+        best = min(best, res)
+        if prev is not None and acceleration > 0:
+            hist_g.append((g - prev[0]).ravel())
+            hist_f.append((f - prev[1]).ravel())
+            if len(hist_g) > acceleration:
+                del hist_g[0], hist_f[0]
+        prev = (g, f)
+        if hist_f:
+            gamma = np.linalg.lstsq(np.stack(hist_f, axis=1), f.ravel(), rcond=None)[0]
+            x = g - (np.stack(hist_g, axis=1) @ gamma).reshape(g.shape)
+        else:
+            x = g
+    return x, it

@@ -96,11 +96,32 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap("segment")
     heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
     lap("facial")
+    skel_c = _depth_skeleton(seg, heads, tails, n_bones)
+    W = _local_weights(C, F, skel_c, proxy, seg, frame)
+    lap("weights")
+    options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
+               "up": up, "front": front, "random_state": random_state}
+    return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
+               labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
+               timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
+               neck_height_canonical=seg.neck_height, other={"joints": seg.joints.to_dict()})
+
+
+def _depth_skeleton(seg, heads, tails, n_bones):
+    """The canonical skeleton of a landmark-free rig: ``neck`` and ``head`` from the depth grouping
+    ``seg`` (:func:`segment_head`), then ``n_bones`` facial bones ``face_00``... (heads and tails
+    (n_bones, 3) float, canonical frame, head sizes) all children of ``head``."""
     names = ["neck", "head"] + [f"face_{i:02d}" for i in range(n_bones)]
     parents = [-1, 0] + [1] * n_bones
-    skel_c = Skeleton(names, parents,
-                      np.vstack([seg.neck_bone[0], seg.head_bone[0], heads]),
-                      np.vstack([seg.neck_bone[1], seg.head_bone[1], tails]))
+    return Skeleton(names, parents,
+                    np.vstack([seg.neck_bone[0], seg.head_bone[0], heads]),
+                    np.vstack([seg.neck_bone[1], seg.head_bone[1], tails]))
+
+
+def _local_weights(C, F, skel_c, proxy, seg, frame):
+    """Bone-heat skin weights (n, b) float of the canonical head ``C`` (n, 3) float, head sizes,
+    with triangles ``F`` (m, 3) int, for ``skel_c``'s b bones (canonical), restricted to their
+    regions by :func:`restrict_weights` (with ``seg``'s masks and joints and ``frame``'s cut)."""
     W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy, prune=0)  # pruned once, after the restriction
     # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
     # blend band, the neck base pure neck, no neck weight on the skull
@@ -108,13 +129,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
                      chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"],
                      cut=frame.cut)
-    lap("weights")
-    options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
-               "up": up, "front": front, "random_state": random_state}
-    return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
-               labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
-               timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
-               neck_height_canonical=seg.neck_height, other={"joints": joints.to_dict()})
+    return W
 
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
