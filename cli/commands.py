@@ -65,7 +65,7 @@ def cmd_transfer(args):
     t = time.perf_counter()
     with progress(args, "transferring the rig" + (" and its ARKit shapes" if args.arkit else "")):
         rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
-                                 arkit=args.arkit, symmetric=args.symmetric)
+                                 arkit=args.arkit, symmetric=args.symmetric, expression_fit=args.expression_fit)
     watch = stopwatch()  # the transfer's own stages are logged inside it
     with progress(args, "writing" + (" the morph targets" if args.expressions or args.expression_sides else "")):
         written = rig.save(out, expressions="sides" if args.expression_sides else args.expressions,
@@ -304,7 +304,7 @@ def cmd_batch(args):
 
     options = make_options(transfer=args.transfer, density=args.density, rig=args.rig,
                            expressions="sides" if args.expression_sides else args.expressions, arkit=args.arkit,
-                           symmetric=args.symmetric, tissue=args.tissue)
+                           symmetric=args.symmetric, tissue=args.tissue, expression_fit=args.expression_fit)
     show = not args.quiet and sys.stderr.isatty()
     bar = None
     watch = stopwatch()

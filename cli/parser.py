@@ -115,6 +115,12 @@ def add_transfer(sub):
                         "landmarks' planes (sculpts, cartoons, robots; not real scans, whose own asymmetry the rig "
                         "follows, nor a one-sided expression, nor automatic landmarks); the sidecar's options.symmetric "
                         "says what was measured")
+    t.add_argument("--no-expression-fit", dest="expression_fit", action="store_false",
+                   help="fit the neutral generic skin even if the head wears an expression. By default the expression "
+                        "the head seems to wear (an open jaw, a smile, a pucker) is solved with ICT-FaceKit's ARKit "
+                        "shapes and identity modes and the generic skin wears it in the fit, so the skin does not slide "
+                        "where the landmarks say nothing; neutral heads, and heads no human face fits (animals), stay "
+                        "neutral; the sidecar's options.expression_fit says what was found")
     _common(t)
 
 
@@ -239,6 +245,8 @@ def add_batch(sub):
                         "(see transfer --help)")
     a.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
                    help="with --transfer: keep each correspondence mirror-symmetric (see transfer --help; default auto)")
+    a.add_argument("--no-expression-fit", dest="expression_fit", action="store_false",
+                   help="with --transfer: fit the neutral generic skin (see transfer --help)")
     a.add_argument("--jobs", type=int, default=1, metavar="N", help="local worker processes (default 1)")
     a.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask distributed scheduler (tcp://host:8786) to run on instead of local processes; "

@@ -105,17 +105,17 @@ def test_boundary_of_open_grid():
 def test_rim_points_land_on_the_targets_rim_edges_not_only_its_vertices():
     """A source rim vertex is pulled to the closest point of the target's rim (the two rim edges at
     its nearest rim vertex): on a coarse target a snap to rim vertices bunched the source's rim."""
-    from autobones.rig_transfer.correspondence import _boundary_neighbours, _onto_rim
+    from autobones.rig_transfer.matching import boundary_neighbours, onto_rim
 
     xs = np.linspace(0.0, 1.0, 3)                      # a 3 x 3 grid: 8 rim vertices, rim edges 0.5 long
     V = np.array([[x, y, 0.0] for y in xs for x in xs])
     F = np.array([[r * 3 + c, r * 3 + c + 1, (r + 1) * 3 + c + 1] for r in range(2) for c in range(2)]
                  + [[r * 3 + c, (r + 1) * 3 + c + 1, (r + 1) * 3 + c] for r in range(2) for c in range(2)])
-    nb = _boundary_neighbours(len(V), F)
+    nb = boundary_neighbours(len(V), F)
     assert (nb[4] == -1).all() and (nb[np.arange(9) != 4] >= 0).all()   # the centre is no rim vertex
     X = np.array([[0.2, -0.05, 0.1], [1.03, 0.7, 0.0], [0.5, 1.1, 0.0]])
     j = np.array([0, 5, 7])                             # their nearest rim vertices
-    P = _onto_rim(X, j, V, nb)
+    P = onto_rim(X, j, V, nb)
     np.testing.assert_allclose(P, [[0.2, 0.0, 0.0], [1.0, 0.7, 0.0], [0.5, 1.0, 0.0]], atol=1e-12)
 
 

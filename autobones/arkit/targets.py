@@ -263,31 +263,25 @@ def shared_landmarks(shapes, landmarks):
     return shared
 
 
-def shape_correspondence(shapes, V, F, landmarks, details=None, expression_weights=None, **fit_options):
+def shape_correspondence(shapes, V, F, landmarks, **fit_options):
     """Each vertex of the shape set's skin on the head: ``P`` (n_s, 3) float64 (head frame and units) and
     the landmark names it was fitted on.
 
     :func:`autobones.rig_transfer.correspondence.dense_correspondence` of ``shapes`` (a ShapeSet) onto
     ``V`` (n, 3), ``F`` (m, 3) from the landmarks both have (``landmarks``: name -> (3,), head frame),
     with :data:`CORRESPONDENCE` and then ``fit_options``. Depends only on the head and its
-    landmarks: ``transfer --arkit`` runs it beside its own fit of the generic rig. The set's own
-    shapes are the fit's expression space (``expressions=``, :mod:`autobones.rig_transfer.expression_prior`;
-    with ``expression_weights`` ({name: weight}) already found, the set's skin wears them) unless
-    ``fit_options`` gives one (None: off); ``details`` gets the fit's details.
+    landmarks: ``transfer --arkit`` runs it beside its own fit of the generic rig. The set's skin is
+    fitted neutral, also on an expressive head: deformation transfer carries each shape from the
+    set's neutral skin to the head's rest, so the two must correspond as they are (fitted wearing the
+    head's open jaw, ICT's jawOpen then opened it again: folds before the repair 14 -> 92, the shapes
+    2.6 -> 12 s).
     """
     from ..rig_transfer.correspondence import dense_correspondence
-    from ..rig_transfer.expression_prior import space_from_deltas
 
     shared = shared_landmarks(shapes, landmarks)
     src = {n: shapes.landmarks[n] for n in shared}
     dst = {n: np.asarray(landmarks[n], dtype=np.float64) for n in shared}
-    if "expressions" not in fit_options:
-        space = space_from_deltas(shapes.deltas, len(shapes.vertices))
-        if space is not None and expression_weights is not None:
-            space["weights"] = expression_weights
-        fit_options["expressions"] = space
-    P = dense_correspondence(shapes.vertices, shapes.faces, V, F, src, dst, details=details,
-                             **{**CORRESPONDENCE, **fit_options})[0]
+    P = dense_correspondence(shapes.vertices, shapes.faces, V, F, src, dst, **{**CORRESPONDENCE, **fit_options})[0]
     return P, shared
 
 

@@ -25,7 +25,7 @@ LANDMARK_SUFFIXES = (".landmarks.json", ".pp", ".pts", ".ljson")
 # options and naming
 
 def make_options(transfer=False, density="medium", rig=None, random_state=0, expressions=False, arkit=False,
-                 symmetric="auto", tissue=False):
+                 symmetric="auto", tissue=False, expression_fit=True):
     """The per-file options as a plain JSON-able dict (what :func:`rig_one` takes).
 
     ``density`` is ignored (None) for a transfer; ``rig`` is made absolute so the
@@ -35,7 +35,8 @@ def make_options(transfer=False, density="medium", rig=None, random_state=0, exp
     ARKit shapes (``transfer(..., arkit=True)``), the same way, and so does ``symmetric`` (transfer
     only) when not ``"auto"`` (``transfer(..., symmetric=...)``). ``tissue`` (with ``expressions``)
     refines the morph targets by the layered tissue (``Rig.save(..., tissue=True)``), present only
-    when set.
+    when set; ``expression_fit`` False (transfer only) fits the neutral generic skin
+    (``transfer(..., expression_fit=False)``), present only when off.
     """
     from ..placement.facial_bones import DENSITIES, bone_count
 
@@ -45,9 +46,13 @@ def make_options(transfer=False, density="medium", rig=None, random_state=0, exp
         return {"mode": "transfer", "density": None,
                 "rig": None if rig is None else os.path.abspath(os.fspath(rig)), "random_state": None,
                 **({"expressions": expressions} if expressions else {}), **({"arkit": True} if arkit else {}),
-                **({"symmetric": symmetric} if symmetric != "auto" else {}), **({"tissue": True} if tissue else {})}
+                **({"symmetric": symmetric} if symmetric != "auto" else {}), **({"tissue": True} if tissue else {}),
+                **({} if expression_fit else {"expression_fit": False})}
     if tissue:
         raise AutobonesError("--tissue refines the AU morph targets of a transfer: add --transfer --expressions")
+    if not expression_fit:
+        raise AutobonesError("--no-expression-fit chooses how a transfer's correspondence is fitted, which place "
+                             "does not use; add --transfer")
     if symmetric != "auto":
         raise AutobonesError("--symmetric chooses how a transfer's correspondence is fitted, which place does not "
                              "use; add --transfer")
@@ -202,7 +207,8 @@ def _make_rig(input_path, options, record):
         if lm is not None:
             record["landmarks"] = lm
         rig = autobones.transfer(input_path, lm, rig=options.get("rig"), arkit=bool(options.get("arkit")),
-                                 symmetric=options.get("symmetric", "auto"))
+                                 symmetric=options.get("symmetric", "auto"),
+                                 expression_fit=options.get("expression_fit", True))
         if lm is None:  # only once they were found: a file that failed to load had none detected
             record["landmarks"] = "detected"
         return rig

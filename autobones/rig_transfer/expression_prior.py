@@ -4,28 +4,35 @@ A scan is often not neutral: an open jaw, a smile, a pucker. The landmarks' thin
 the neutral generic skin smoothly onto it, and between the landmarks the smooth warp and the fit's
 shape term (which keeps the source's own edges) pull the skin back toward a neutral face: the lips
 and cheeks slide (benchmarks/correspondence.py ``--families``). Model-based face fitting solves this
-by fitting expression coefficients of a linear blendshape model with the shape (Blanz & Vetter 1999;
-Li, Bolkart, Black, Li & Romero 2017, FLAME, fit expression and identity by landmarks and
-scan-to-mesh distance). Here the expression space is a set of displacement fields on the source
-skin (ICT-FaceKit's expressions, Li et al. 2020, carried onto it), and what is solved is only the
-expression; the identity is left to the warp and the fit, as before::
+by fitting the expression coefficients of a linear blendshape model together with its identity
+coefficients (Blanz & Vetter 1999; Li, Bolkart, Black, Li & Romero 2017, FLAME, by landmarks and
+scan-to-mesh distance). Here the expression space is a set of displacement fields on the source skin
+(ICT-FaceKit's expressions, Li et al. 2020) and, optionally, identity modes of the same skin (ICT's
+20 principal components, one standard deviation each), solved together so that a face's own shape
+is not taken for an expression::
 
-    w* = argmin_{0 <= w <= 1}  mean_i (n_i . (T_w(v_i + E_i w) - c_i) / rho)^2 + strength * ||w||^2
+    w*, a* = argmin  mean_i (n_i . (T(v_i + E_i w + I_i a) - c_i) / rho)^2 + strength ||w||^2 + s_id ||a||^2
+             0 <= w <= 1, |a| <= 3
 
-- ``v_i + E_i w``: source vertex ``i`` wearing the expression ``w`` (k weights), ``E_i`` its (3, k)
-  displacements; the landmarks move with their triangles;
-- ``T_w``: the thin-plate spline from the posed source landmarks to the target's, so the warp
-  absorbs whatever the landmarks say and the weights are decided by the surface *between* them;
+- ``v_i + E_i w + I_i a``: source vertex ``i`` wearing the expression ``w`` (k weights) and the identity
+  ``a`` (j weights); the landmarks move with their triangles;
+- ``T``: the thin-plate spline from the posed source landmarks to the target's, so the warp absorbs
+  whatever the landmarks say and the weights are decided by the surface *between* them;
 - ``c_i``, ``n_i``: the nearest target vertex and its normal (point to plane), matches whose normals
   differ by more than 60 degrees or that lie beyond 5 times the median distance dropped (as the fit);
-- ``rho``: the target landmarks' RMS radius, so the cost has no unit; ``strength`` keeps a neutral
-  head neutral (identity differences the warp leaves are not an expression).
+- ``rho``: the target landmarks' RMS radius, so the cost has no unit.
 
-Gauss-Newton on the point-to-plane residuals with the matches refreshed each round; the Jacobian by
-forward differences (one small TPS fit and a transform of the sample per column: the sample is at
-most :data:`SAMPLE` vertices, so a round costs ~k small solves); each step a bounded linear least
-squares (``scipy.optimize.lsq_linear``). The posed source is then what the fit warps and keeps
-(:func:`autobones.rig_transfer.correspondence.fit_surface`, ``expressions=``).
+The identity alone is solved first; the expression is kept only when it removes :data:`MIN_GAIN` of
+what the identity alone leaves, on a head the identity alone fits within :data:`MAX_MISFIT` (a bunny is
+no human face to wear a smile). Bounded Gauss-Newton with the matches refreshed each round; the
+Jacobian by forward differences (one small TPS fit and a transform of the sample per column, at most
+:data:`SAMPLE` vertices); each step a bounded least squares (``scipy.optimize.lsq_linear``) on the k
+rows of its normal equations' Cholesky factor.
+
+``transfer`` solves it on the ARKit set's skin (:func:`shape_set_expression`: a real face, with its
+identity modes) and the generic skin wears the weights found, through the same ARKit shapes carried
+onto it (``expressions=`` of :func:`autobones.rig_transfer.correspondence.fit_surface`); the generic's
+own skin would take its difference from a real face for an expression.
 """
 from __future__ import annotations
 
@@ -44,17 +51,17 @@ from ..geometry.tps import ThinPlateSpline
 SAMPLE = 1500
 # weight of ||w||^2 against the mean squared point-to-plane residual in units of the landmark radius
 STRENGTH = 2e-5
-ROUNDS = 6
+ROUNDS = 4
 STEP = 0.1          # forward-difference step of the Jacobian, in expression weight
 MAX_ANGLE = 60.0
 # the weights are kept only when they lower the cost without an expression (the identity alone,
 # refreshed matches) by this share, and only on a head the identity alone fits within MAX_MISFIT
-# (RMS point-to-plane residual, landmark radii). Measured on the shared heads (benchmarks/README.md,
-# correspondence.py --families): neutral human scans and sculpts outside the identity modes gain
-# 0.15-0.46 (a face's own shape partly taken for an expression), ICT's expressions 0.8-0.97; heads
-# the human modes do not fit (misfit 0.13-0.22: a bunny, an armadillo, a chess knight) are not
-# given a human expression, whatever it gains
-MIN_GAIN = 0.5
+# (RMS point-to-plane residual, landmark radii). Measured (benchmarks/README.md, "expression-aware
+# fit"): ICT's expressions in the space gain 0.8-0.97, left out of it 0.3-0.7 (a smile 0.43, an open
+# jaw 0.29); neutral human scans and sculpts outside ICT's identity modes 0.02-0.47 (the SMPL woman
+# 0.47: a face's own shape partly taken for an expression); heads the human modes do not fit (misfit
+# 0.14-0.22: a bunny, an armadillo, a chess knight) are never given a human expression
+MIN_GAIN = 0.4
 MAX_MISFIT = 0.1
 # identity modes (``identity=``): weight of ||alpha||^2 (modes scaled to one standard deviation) and
 # the bound on each weight
@@ -155,10 +162,10 @@ class _Residuals:
         return float(np.mean(r ** 2) + self.penalty @ theta ** 2)
 
 
-def _gauss_newton(res, free, lo, hi, rounds):
-    """Bounded Gauss-Newton on the columns ``free`` (bool (k,)) of ``res`` from 0; returns theta (k,)
-    and the cost at 0 (its own matches)."""
-    theta = np.zeros(len(free))
+def _gauss_newton(res, free, lo, hi, rounds, theta=None):
+    """Bounded Gauss-Newton on the columns ``free`` (bool (k,)) of ``res`` from ``theta`` (default 0);
+    returns theta (k,) and the cost at the start (its own matches)."""
+    theta = np.zeros(len(free)) if theta is None else theta.copy()
     cols = np.flatnonzero(free)
     pen = res.penalty[cols]
     first = None
@@ -231,10 +238,10 @@ def fit_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, identity=None,
         basis = np.concatenate([basis, identity])
     res = _Residuals(V_src, F_src, P, Q, V_tgt, F_tgt, basis, np.r_[np.full(k, strength), np.full(j, identity_strength)])
     lo, hi = np.r_[np.zeros(k), np.full(j, -ID_BOUND)], np.r_[np.ones(k), np.full(j, ID_BOUND)]
-    theta, neutral = _gauss_newton(res, np.ones(k + j, dtype=bool), lo, hi, rounds)
-    if j:   # the cost without an expression: the identity alone
-        alone, _ = _gauss_newton(res, np.r_[np.zeros(k, dtype=bool), np.ones(j, dtype=bool)], lo, hi, rounds)
-        neutral = res.cost(alone)
+    start = None
+    if j:   # the identity alone first: its cost is what an expression has to improve on, and the start
+        start, _ = _gauss_newton(res, np.r_[np.zeros(k, dtype=bool), np.ones(j, dtype=bool)], lo, hi, rounds)
+    theta, neutral = _gauss_newton(res, np.ones(k + j, dtype=bool), lo, hi, rounds, start)
     gain = 1.0 - res.cost(theta) / neutral if neutral > 0 else 0.0
     misfit = float(np.sqrt(max(neutral, 0.0)))
     w = theta[:k] if gain >= MIN_GAIN and misfit <= MAX_MISFIT else np.zeros(k)

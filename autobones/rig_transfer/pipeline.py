@@ -188,10 +188,12 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         Also make the 52 ARKit shapes on this head (:func:`autobones.arkit.targets.arkit_targets`):
         ``rig.arkit_targets`` and the ``rig.arkit`` record; ``save`` writes them as morph targets.
     expression_fit : bool
-        Fit the generic skin (and, with ``arkit``, the ARKit set's skin) wearing the expression the head
-        seems to wear (:mod:`autobones.rig_transfer.expression_prior`: an open jaw, a smile, a pucker;
-        a neutral head stays neutral), so the skin does not slide where the landmarks say nothing;
-        ``rig.options['expression_fit']`` says what was found. False: fit the neutral skins.
+        Fit the generic skin wearing the expression the head seems to wear (solved on the ARKit set's
+        skin with its identity modes, :mod:`autobones.rig_transfer.expression_prior`: an open jaw, a
+        smile, a pucker; a neutral head, or one no human face fits, stays neutral), so the skin does not
+        slide where the landmarks say nothing; ``rig.options['expression_fit']`` says what was found.
+        The ARKit set's own correspondence stays neutral (:func:`~autobones.arkit.targets.shape_correspondence`).
+        False: the neutral generic skin, as before.
     symmetric : {"auto", "on", "off"}
         Keep the correspondence mirror-symmetric (:mod:`autobones.rig_transfer.symmetry`): ``auto``
         when the head's landmark pairs are mirror images and the head and the generic skin are
@@ -250,14 +252,15 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
     found, found_details = {}, {}
-    if expression_fit or arkit:
+    space = generic_expression_space(generic, rig) if expression_fit and "expressions" not in fit_options else None
+    if space is not None or arkit:
         from ..arkit.targets import rig_shape_set
 
         shapes = rig_shape_set(rig_option)
-    if expression_fit:
-        # the expression solved once, on the ARKit set's skin (a real face: what its warp leaves between
-        # the landmarks is the expression; on the generic's own skin it would be the identity); both
-        # fits below wear it
+    if space is not None:
+        # the expression solved on the ARKit set's skin (a real face, with its identity modes: what its
+        # warp leaves between the landmarks is then the expression; on the generic's own skin it would
+        # be the generic's identity) and worn by the generic skin in its fit
         found, found_details = shape_set_expression(shapes, V, F, lm, identity=shapes.identity)
         lap("expression")
     pending = None
@@ -269,8 +272,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         from ..arkit.targets import shape_correspondence
 
         pool = ThreadPoolExecutor(1)
-        pending = pool.submit(shape_correspondence, shapes, V, F, lm, None, found if expression_fit else None,
-                              **({} if expression_fit else {"expressions": None}))
+        pending = pool.submit(shape_correspondence, shapes, V, F, lm)
         pool.shutdown(wait=False)  # the worker ends with its one task
     fit_timings = {}
     if "jaw" not in fit_options:
@@ -278,8 +280,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
         fit_options["jaw"] = generic_jaw_prior(generic, rig)
     if "expressions" not in fit_options:
-        space = generic_expression_space(generic, rig) if any(found.values()) else None
-        fit_options["expressions"] = None if space is None else {**space, "weights": found}
+        fit_options["expressions"] = {**space, "weights": found} if any(found.values()) else None
     fit_details = {}
     P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
                                        details=fit_details, **fit_options)
@@ -323,7 +324,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
                "joints_from_ears": from_ears,
                "symmetric": symmetry.record_,
-               "expression_fit": _expression_record(found_details, fit_details, expression_fit),
+               "expression_fit": _expression_record(found_details, fit_details, expression_fit, space),
                **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
@@ -343,12 +344,14 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _expression_record(found, fit_details, asked):
+def _expression_record(found, fit_details, asked, space):
     """The sidecar's ``expression_fit``: the expression the head seems to wear (``weights`` {name:
     weight} over 0.05, empty for a neutral head; ``gain``: the share of the neutral skin's misfit it
     removes) and the weights the generic skin wore in its fit (``generic``), or why it did not run."""
     if not asked:
         return {"off": "expression_fit=False (--no-expression-fit)"}
+    if space is None:
+        return {"off": "the generic rig has no expression space (expressions.npz), or the fit was given one"}
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
             "solved_on": "the ARKit shape set's skin",
             "generic": fit_details.get("expression", {}).get("weights", {})}
