@@ -67,11 +67,11 @@ def _error(ict, R, truth, lm):
     return e.mean(), np.percentile(e, 95)
 
 
-@pytest.mark.parametrize("shape", ["mouthSmileLeft", "mouthPucker"])
+@pytest.mark.parametrize("shape", ["mouthPucker", "mouthFunnel"])
 def test_left_out_expression_fit_within_the_bounds(ict, shape):
-    """A smile and a pucker the space does not hold, on another identity's decimated surface: the fit
-    wearing the expression found is within 1 % mean / 3 % p95 of ex-ex on the face and far better than
-    the neutral fit (measured 0.63 / 1.96 against 1.25 / 5.42, and 0.49 / 1.82 against 0.69 / 3.00)."""
+    """A pucker and a funnel the space does not hold, on another identity's decimated surface: the fit
+    wearing the expression found is within 1 % mean / 3 % p95 of ex-ex on the face and better than the
+    neutral fit (measured 0.49 / 1.82 against 0.69 / 3.00, and 0.58 / 2.11 against 0.78 / 2.90)."""
     S = ict[0]
     truth, lm, VT, FT = _target(ict, shape)
     src = {n: S.landmarks[n] for n in lm}
@@ -83,7 +83,25 @@ def test_left_out_expression_fit_within_the_bounds(ict, shape):
     mean0, p950 = _error(ict, neutral, truth, lm)
     assert details["expression"]["weights"], details
     assert mean <= 1.0 and p95 <= 3.0, (mean, p95)
-    assert mean < 0.8 * mean0 and p95 < 0.75 * p950, (mean, p95, mean0, p950)
+    assert mean < 0.85 * mean0 and p95 < 0.8 * p950, (mean, p95, mean0, p950)
+
+
+def test_a_left_out_smile_is_not_forced():
+    """A smile the space does not hold gains too little over the identity alone (0.43 < MIN_GAIN): the
+    fit stays neutral, exactly the fit without the space, rather than risk a wrong expression."""
+    S = load_shapes()
+    skin = np.load(os.path.join(shapes_folder(), "ict_arkit.npz"))["skin_index"]
+    truth = load_mesh(data("ict/identity000.obj"))[0][skin] + S.deltas["mouthSmileLeft"]
+    names = sorted(S.landmarks)
+    _, lface, lbary, _ = closest_points(np.array([S.landmarks[n] for n in names]), S.vertices, S.faces)
+    lm = {n: lbary[i] @ truth[S.faces[lface[i]]] for i, n in enumerate(names)}
+    pair = {"mouthSmileLeft", "mouthSmileRight"}
+    space = space_from_deltas({k: v for k, v in S.deltas.items() if k not in pair}, len(S.vertices))
+    details = {}
+    w = fit_expression(S.vertices, S.faces, np.array([S.landmarks[n] for n in names]),
+                       np.array([lm[n] for n in names]), truth, S.faces, space, identity=S.identity[1:],
+                       details=details)
+    assert not w.any() and 0.2 < details["gain"] < 0.5, details
 
 
 def test_the_expression_found_is_the_one_worn(ict):
@@ -112,7 +130,7 @@ def test_a_neutral_real_scan_stays_neutral():
 
 def test_transfer_records_and_wears_the_expression():
     """``transfer`` solves the expression once, the generic skin wears it in its fit, the sidecar says
-    which; ``expression_fit=False`` fits the neutral skin and says so; the jaw prior takes jawOpen's place."""
+    which; ``expression_fit=False`` fits the neutral skin and says so."""
     V, F = load_mesh(data("ict/mouthSmile_L.obj"))[:2]
     lm = json.loads(open(data("ict/generic_neutral_mesh.landmarks.json")).read())["landmarks"]
     N = load_mesh(data("ict/generic_neutral_mesh.obj"))[0]
@@ -136,8 +154,7 @@ def test_space_helpers():
     assert space["names"] == ["jawOpen"] and space["basis"].shape == (1, n, 3)
     assert all(not k.startswith(NOT_SKIN) for k in space["names"])
     assert space_from_deltas({"cheekPuff": np.zeros((n, 3))}, n) is None
-    assert np.array_equal(weights_by_name(["a", "b", "jawOpen"], {"a": 2.0, "jawOpen": 0.5}, drop=("jawOpen",)),
-                          [1.0, 0.0, 0.0])
+    assert np.array_equal(weights_by_name(["a", "b", "jawOpen"], {"a": 2.0, "jawOpen": -0.5}), [1.0, 0.0, 0.0])
     with pytest.raises(AutobonesError, match="basis"):
         check_space({"names": ["a"], "basis": np.zeros((1, n + 1, 3))}, n)
     with pytest.raises(AutobonesError, match="NaN"):

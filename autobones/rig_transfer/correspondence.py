@@ -380,7 +380,7 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         (k,), ``basis`` (k, n, 3) displacements at weight 1 (source units), optionally ``identity``
         ((j, n, 3) identity modes solved with it) or ``weights`` ({name: weight}, found on another skin
         of the same space): the source wears them (given
-        weights, less the jaw opening when ``jaw`` opened it), or the weights the target seems to wear
+        weights, on top of the jaw prior's opening), or the weights the target seems to wear
         (solved, :func:`~autobones.rig_transfer.expression_prior.fit_expression`), before the warp;
         ``details['expression']`` says which. None: the neutral source.
 
@@ -407,14 +407,12 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
     if edge_reference not in ("source", "tps", "blend"):
         raise AutobonesError(f"edge_reference must be 'blend', 'source' or 'tps', got {edge_reference!r}")
-    V_neutral = V_src
     if jaw is not None:
         V_src, P = open_source_jaw(V_src, F_src, P, Q, jaw, details)
     elif details is not None:
         details["jaw_deg"] = 0.0
     if expressions is not None:
-        V_src, P = pose_source_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, details,
-                                           jaw_opened=V_src is not V_neutral)
+        V_src, P = pose_source_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, details)
     tps = ThinPlateSpline().fit(P, Q)
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight,

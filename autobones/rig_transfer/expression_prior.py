@@ -57,11 +57,12 @@ MAX_ANGLE = 60.0
 # the weights are kept only when they lower the cost without an expression (the identity alone,
 # refreshed matches) by this share, and only on a head the identity alone fits within MAX_MISFIT
 # (RMS point-to-plane residual, landmark radii). Measured (benchmarks/README.md, "expression-aware
-# fit"): ICT's expressions in the space gain 0.8-0.97, left out of it 0.3-0.7 (a smile 0.43, an open
-# jaw 0.29); neutral human scans and sculpts outside ICT's identity modes 0.02-0.47 (the SMPL woman
-# 0.47: a face's own shape partly taken for an expression); heads the human modes do not fit (misfit
-# 0.14-0.22: a bunny, an armadillo, a chess knight) are never given a human expression
-MIN_GAIN = 0.4
+# fit"): ICT's expressions in the space gain 0.8-0.97, left out of it 0.14-0.7 (a pucker 0.6-0.7, a
+# smile 0.14-0.43, an open jaw 0.2-0.57); neutral human scans and sculpts outside ICT's identity modes
+# 0.02-0.47. At 0.4 the SMPL woman (0.47) wore a smile and her zoo checks lost two cells: a neutral
+# head stays neutral first. Heads the human modes do not fit (misfit 0.14-0.22: a bunny, an
+# armadillo, a chess knight) are never given a human expression
+MIN_GAIN = 0.5
 MAX_MISFIT = 0.1
 # identity modes (``identity=``): weight of ||alpha||^2 (modes scaled to one standard deviation) and
 # the bound on each weight
@@ -85,14 +86,9 @@ def space_from_deltas(deltas, n):
                                                for k in names])}
 
 
-# the shapes that open the jaw: a jaw prior (:mod:`.jaw_prior`) that has opened it already takes their place
-JAW_SHAPES = ("jawOpen",)
-
-
-def weights_by_name(names, given, drop=()):
-    """(k,) weights in [0, 1] of the space's ``names`` from ``given`` ({name: weight}); names it
-    lacks and names in ``drop`` weigh 0."""
-    return np.array([0.0 if n in drop else float(np.clip(given.get(n, 0.0), 0.0, 1.0)) for n in names])
+def weights_by_name(names, given):
+    """(k,) weights in [0, 1] of the space's ``names`` from ``given`` ({name: weight}); names it lacks weigh 0."""
+    return np.array([float(np.clip(given.get(n, 0.0), 0.0, 1.0)) for n in names])
 
 
 def check_space(expressions, n):
