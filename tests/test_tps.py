@@ -103,3 +103,31 @@ def test_bad_arguments_raise():
         ThinPlateSpline().transform(P)
     with pytest.raises(AutobonesError, match="share only"):
         landmark_arrays({"a": [0, 0, 0]}, {"a": [0, 0, 0], "b": [1, 1, 1]})
+
+
+def test_cardinal_weights_reproduce_the_warp_for_any_targets():
+    """``cardinal(X) @ dst`` is the warp of X for the spline fitted to ``dst``, and the same weights
+    serve other targets: they depend on the source landmarks only."""
+    rng = np.random.default_rng(3)
+    P = rng.normal(size=(12, 3))
+    Q1, Q2 = P + 0.2 * rng.normal(size=P.shape), 2.0 * P + 1.0 + 0.1 * rng.normal(size=P.shape)
+    X = rng.normal(size=(40, 3))
+    S = ThinPlateSpline().fit(P, Q1).cardinal(X)
+    assert S.shape == (40, 12)
+    assert np.allclose(S @ Q1, ThinPlateSpline().fit(P, Q1).transform(X), atol=1e-10)
+    assert np.allclose(S @ Q2, ThinPlateSpline().fit(P, Q2).transform(X), atol=1e-10)
+    assert np.allclose(S.sum(axis=1), 1.0)          # constants are reproduced
+
+
+def test_jacobian_matches_finite_differences():
+    rng = np.random.default_rng(4)
+    P = rng.normal(size=(10, 3))
+    tps = ThinPlateSpline().fit(P, P + 0.3 * rng.normal(size=P.shape))
+    X = rng.normal(size=(5, 3))
+    J = tps.jacobian(X)
+    h = 1e-6
+    for a in range(3):
+        d = np.zeros(3)
+        d[a] = h
+        fd = (tps.transform(X + d) - tps.transform(X - d)) / (2 * h)
+        assert np.allclose(J[:, a, :], fd, atol=1e-6)

@@ -191,6 +191,7 @@ class ThinPlateSpline:
         rhs[:k] = Q
         sol = np.linalg.solve(L, rhs)
         self.control_points_ = P
+        self.system_ = L
         self.coef_ = sol[:k]
         self.affine_ = sol[k:]
         self.bending_energy_ = -float(np.einsum("ij,ik,kj->", self.coef_, K, self.coef_))
@@ -220,6 +221,28 @@ class ThinPlateSpline:
             r = np.linalg.norm(X[s:s + CHUNK, None, :] - C[None, :, :], axis=2)
             Y[s:s + CHUNK] += r @ self.coef_
         return Y
+
+    def cardinal(self, X):
+        """The warp's weights of each landmark's target at ``X`` (n, 3) (source frame): (n, k), so that
+        ``cardinal(X) @ dst`` is the warp of ``X`` fitted to ``dst`` (the same spline, any targets).
+        ``O(n * k)`` memory: for a sample of points, not a whole dense mesh."""
+        if not hasattr(self, "coef_"):
+            raise AutobonesError("ThinPlateSpline.cardinal called before fit")
+        X = as_points(X, "points")
+        C = self.control_points_
+        k = len(C)
+        inv = np.linalg.solve(self.system_, np.eye(k + 4)[:, :k])                  # (k + 4, k)
+        return np.c_[np.linalg.norm(X[:, None, :] - C[None, :, :], axis=2), np.ones(len(X)), X] @ inv
+
+    def jacobian(self, X):
+        """(n, 3, 3): the warp's derivative at each point of ``X`` (n, 3) in the row convention of
+        :meth:`transform` (``dY = dX @ J``); ``O(n * k)`` memory."""
+        if not hasattr(self, "coef_"):
+            raise AutobonesError("ThinPlateSpline.jacobian called before fit")
+        X = as_points(X, "points")
+        d = X[:, None, :] - self.control_points_[None, :, :]
+        u = d / np.maximum(np.linalg.norm(d, axis=2, keepdims=True), 1e-300)      # grad of U(r) = r
+        return self.affine_[1:][None] + np.einsum("ila,lb->iab", u, self.coef_)
 
     def fit_transform(self, src, dst, X):
         """``fit(src, dst).transform(X)``."""
