@@ -56,12 +56,12 @@ ROUNDS = 4
 MAX_ANGLE = 60.0
 # the weights are kept only when they lower the cost without an expression (the identity alone,
 # refreshed matches) by this share, and only on a head the identity alone fits within MAX_MISFIT
-# (RMS point-to-plane residual, landmark radii). Measured (benchmarks/README.md, "expression-aware
-# fit"): ICT's expressions in the space gain 0.8-0.97, left out of it 0.14-0.7 (a pucker 0.6-0.7, a
-# smile 0.14-0.43, an open jaw 0.2-0.57); neutral human scans and sculpts outside ICT's identity modes
-# 0.02-0.47. At 0.4 the SMPL woman (0.47) wore a smile and her zoo checks lost two cells: a neutral
-# head stays neutral first. Heads the human modes do not fit (misfit 0.14-0.22: a bunny, an
-# armadillo, a chess knight) are never given a human expression
+# (RMS point-to-plane residual, landmark radii). Measured (benchmarks/README.md, "The expression-aware
+# fit"): ICT's expressions in the space gain 0.8-0.97; left out of it a pucker 0.50-0.62, an open jaw
+# 0.30-0.53, a smile 0.18-0.43; neutral heads 0.02-0.33 (ICT's identities) and 0.07-0.26 (james, Lee
+# Perry-Smith, the menpo3d template, SMPL). At 0.4 the SMPL woman wore a smile (an earlier solver,
+# gain 0.47) and lost two zoo cells: a neutral head stays neutral first. Heads the human modes do not
+# fit (misfit 0.14-0.18: a bunny, an armadillo, a chess knight) are never given a human expression
 MIN_GAIN = 0.5
 MAX_MISFIT = 0.1
 # identity modes (``identity=``): weight of ||alpha||^2 (modes scaled to one standard deviation) and
