@@ -292,6 +292,11 @@ def cmd_build_rig(args):
     watch.lap("build")
     if shapes is not None:
         write_shape_set(shapes, args.output)
+    from autobones.rig_building.expression_space import build_expression_space
+
+    with progress(args, "carrying the ARKit shapes onto the base (its expression space)"):
+        build_expression_space(args.output)   # what transfer's expression fit poses this base with
+    watch.lap("expression space")
     print(f"{args.output}: {len(rig.skeleton)} bones, {len(rig.muscles)} muscles, {len(rig.fields)} fields, "
           f"{len(rig.landmarks)} landmarks, {len(rig.vertices)} vertices"
           + (f", ARKit shapes {len(shapes.deltas)} given ({len(shapes.meta['absent'])} absent)" if shapes else "")

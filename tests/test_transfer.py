@@ -188,7 +188,9 @@ def test_cli_transfer_and_build_rig(tmp_path):
                               str(base / "default_head.landmarks.json"), "-o", str(tmp_path / "my_rig")],
                        env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
-    assert sorted(os.listdir(tmp_path / "my_rig")) == ["fields.npz", "mesh.obj", "rig.json"]
+    assert sorted(os.listdir(tmp_path / "my_rig")) == ["expressions.npz", "fields.npz", "mesh.obj", "rig.json"]
+    with np.load(tmp_path / "my_rig" / "expressions.npz") as z:   # the ARKit shapes on the base, for the fit
+        assert z["basis"].shape[1:] == (len(load_mesh(base / "default_head.obj")[0]), 3) and len(z["names"]) > 30
     mesh, marks = HEADS["goat"]
     r = subprocess.run(cli + ["transfer", str(mesh), "--landmarks", str(marks), "--rig", str(tmp_path / "my_rig"),
                               "-o", str(tmp_path / "goat.glb")], env=env, capture_output=True, text=True, timeout=600)
@@ -196,6 +198,7 @@ def test_cli_transfer_and_build_rig(tmp_path):
     side = json.loads((tmp_path / "goat.rig.json").read_text())
     assert [b["name"] for b in side["bones"]][:5] == ["neck", "head", "jaw", "eye_l", "eye_r"]
     assert len(side["muscles"]) == 40 and "region" in side["field_labels"]
+    assert side["options"]["expression_fit"]["weights"] == {}          # the goat is given no human expression
     npz = np.load(tmp_path / "goat.weights.npz")
     assert "field/region" in npz and npz["weights"].shape[0] == len(load_mesh(mesh)[0])
     # bad landmarks through the CLI: one line, exit 2, nothing written

@@ -257,6 +257,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         from ..arkit.targets import rig_shape_set
 
         shapes = rig_shape_set(rig_option)
+        if shapes.identity is None:   # without identity modes a face's own shape is taken for an expression
+            space = None
     if space is not None:
         # the expression solved on the ARKit set's skin (a real face, with its identity modes: what its
         # warp leaves between the landmarks is then the expression; on the generic's own skin it would
@@ -351,7 +353,8 @@ def _expression_record(found, fit_details, asked, space):
     if not asked:
         return {"off": "expression_fit=False (--no-expression-fit)"}
     if space is None:
-        return {"off": "the generic rig has no expression space (expressions.npz), or the fit was given one"}
+        return {"off": "the generic rig has no expression space (expressions.npz), its shape set no identity modes, "
+                       "or the fit was given one"}
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
             "solved_on": "the ARKit shape set's skin",
             "generic": fit_details.get("expression", {}).get("weights", {})}
