@@ -292,7 +292,7 @@ def cmd_build_rig(args):
     watch.lap("build")
     if shapes is not None:
         write_shape_set(shapes, args.output)
-    from autobones.rig_building.expression_space import build_expression_space
+    from autobones.rig_transfer.expression_space import build_expression_space
 
     with progress(args, "carrying the ARKit shapes onto the base (its expression space)"):
         build_expression_space(args.output)   # what transfer's expression fit poses this base with

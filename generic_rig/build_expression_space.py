@@ -1,6 +1,6 @@
 """Build the generic skin's expression space: ``generic_rig/default/expressions.npz``.
 
-:func:`autobones.rig_building.expression_space.build_expression_space` on the built-in rig (the
+:func:`autobones.rig_transfer.expression_space.build_expression_space` on the built-in rig (the
 packaged ARKit set carried onto its skin; what ``transfer``'s expression fit poses it with). Run
 ``python generic_rig/build_expression_space.py`` after ``build_default_rig.py`` (it rewrites the folder);
 ``autobones build-rig`` does the same for a studio's rig.
@@ -16,7 +16,7 @@ ROOT = os.path.dirname(HERE)
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
-from autobones.rig_building.expression_space import build_expression_space  # noqa: E402
+from autobones.rig_transfer.expression_space import build_expression_space  # noqa: E402
 from autobones.rig_transfer.pipeline import EXPRESSION_FILE  # noqa: E402
 
 

@@ -14,14 +14,14 @@ import os
 
 import numpy as np
 
-from ..rig_transfer.expression_prior import space_from_deltas
-from ..rig_transfer.pipeline import EXPRESSION_FILE, load_generic
+from .expression_prior import space_from_deltas
+from .pipeline import EXPRESSION_FILE, load_generic
 
 
 def build_expression_space(folder):
     """Write ``expressions.npz`` (``names`` (k,), ``basis`` (k, n, 3) float16) into the rig ``folder``
     (atomically: a temporary file renamed over it); returns the names."""
-    from ..rig_transfer.pipeline import transfer
+    from .pipeline import transfer
 
     generic = load_generic(folder)
     rig = transfer((generic.vertices, generic.faces), dict(generic.landmarks), rig=folder, arkit=True,
