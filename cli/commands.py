@@ -77,6 +77,10 @@ def cmd_transfer(args):
         print(f"landmarks: {len(conf)} found automatically, mean confidence {sum(conf.values()) / max(len(conf), 1):.2f}"
               + (f"; dropped {', '.join(dropped)}" if dropped else "")
               + f" (check them: autobones landmarks {args.head} --preview PNG)")
+    worn = (rig.options.get("expression_fit") or {}).get("weights") or {}
+    if worn:   # a scan's expression is news to the user: the rig's rest pose wears it
+        print("expression: the head seems to wear " + ", ".join(f"{k} {v:.2f}" for k, v in list(worn.items())[:4])
+              + "; the generic skin wore it in the fit (--no-expression-fit: fit it neutral)")
     print(f"{written[0]}: {len(rig.skeleton)} bones, {len(rig.muscles or [])} muscles, "
           f"{len(rig.fields)} fields, {len(rig.options['landmarks_used'])} landmarks used, "
           f"{len(rig.vertices)} vertices, {time.perf_counter() - t:.1f} s; "
