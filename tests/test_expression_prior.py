@@ -172,3 +172,22 @@ def test_fit_expression_is_deterministic(ict):
     a = fit_expression(S.vertices, S.faces, P, Q, VT, FT, space, identity=space["identity"])
     b = fit_expression(S.vertices, S.faces, P, Q, VT, FT, space, identity=space["identity"])
     assert np.array_equal(a, b) and a.max() > 0.3
+
+
+def test_automatic_landmarks_leave_the_fit_neutral(monkeypatch):
+    """With detected landmarks the detector's biases would read as an expression: the fit stays
+    neutral and the sidecar says why (the detection itself is stubbed: this is about the record)."""
+    from autobones.rig_transfer import pipeline
+
+    V, F = load_mesh(data("menpo3d/james.obj"))[:2]
+    lm = json.loads(open(data("menpo3d/james.landmarks.json")).read())["landmarks"]
+    real = pipeline._head_landmarks
+
+    def as_detected(*args):
+        got, frame, _, shared = real(*args)
+        return got, frame, type("Detected", (), {"confidence": {}, "dropped": [], "flagged": []})(), shared
+
+    monkeypatch.setattr(pipeline, "_head_landmarks", as_detected)
+    monkeypatch.setattr(pipeline, "generic_detected_landmarks", lambda generic, rig=None: None)
+    rig = autobones.transfer((V, F), lm)
+    assert "automatic landmarks" in rig.options["expression_fit"]["off"]

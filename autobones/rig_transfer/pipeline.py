@@ -257,7 +257,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         from ..arkit.targets import rig_shape_set
 
         shapes = rig_shape_set(rig_option)
-        if shapes.identity is None:   # without identity modes a face's own shape is taken for an expression
+        if shapes.identity is None or detected is not None:
+            # without identity modes a face's own shape is taken for an expression, and the detector's
+            # biases against the set's hand-placed landmarks are (a neutral ICT identity gained 0.47)
             space = None
     if space is not None:
         # the expression solved on the ARKit set's skin (a real face, with its identity modes: what its
@@ -326,7 +328,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
                "joints_from_ears": from_ears,
                "symmetric": symmetry.record_,
-               "expression_fit": _expression_record(found_details, fit_details, expression_fit, space),
+               "expression_fit": _expression_record(found_details, fit_details, expression_fit, space,
+                                                    detected is not None),
                **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
@@ -346,12 +349,15 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _expression_record(found, fit_details, asked, space):
+def _expression_record(found, fit_details, asked, space, detected):
     """The sidecar's ``expression_fit``: the expression the head seems to wear (``weights`` {name:
     weight} over 0.05, empty for a neutral head; ``gain``: the share of the neutral skin's misfit it
     removes) and the weights the generic skin wore in its fit (``generic``), or why it did not run."""
     if not asked:
         return {"off": "expression_fit=False (--no-expression-fit)"}
+    if detected:
+        return {"off": "automatic landmarks: their biases against the shape set's hand-placed ones would be taken "
+                       "for an expression; give a landmark file to fit an expressive head"}
     if space is None:
         return {"off": "the generic rig has no expression space (expressions.npz), its shape set no identity modes, "
                        "or the fit was given one"}
