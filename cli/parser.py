@@ -120,7 +120,8 @@ def add_transfer(sub):
                         "the head seems to wear (an open jaw, a smile, a pucker) is solved with ICT-FaceKit's ARKit "
                         "shapes and identity modes and the generic skin wears it in the fit, so the skin does not slide "
                         "where the landmarks say nothing; neutral heads, and heads no human face fits (animals), stay "
-                        "neutral; the sidecar's options.expression_fit says what was found")
+                        "neutral, and so does every head with automatic landmarks (give a landmark file); the sidecar's "
+                        "options.expression_fit says what was found")
     _common(t)
 
 
