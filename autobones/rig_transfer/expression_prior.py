@@ -288,7 +288,9 @@ def shape_set_expression(shapes, V_tgt, F_tgt, landmarks, identity=None, min_lan
     shared = [n for n in shapes.landmarks if n in landmarks]
     space = space_from_deltas(shapes.deltas, len(shapes.vertices))
     if len(shared) < min_landmarks or space is None:
-        return {}, {"weights": {}, "gain": 0.0}
+        why = (f"{len(shared)} landmarks shared with the shape set, {min_landmarks} needed" if space is not None
+               else "the shape set has no skin expression")
+        return {}, {"weights": {}, "gain": 0.0, "note": why}
     P = np.array([shapes.landmarks[n] for n in shared], dtype=np.float64)
     Q = np.array([landmarks[n] for n in shared], dtype=np.float64)
     details = {}

@@ -362,7 +362,7 @@ def _expression_record(found, fit_details, asked, space, detected):
         return {"off": "the generic rig has no expression space (expressions.npz), its shape set no identity modes, "
                        "or the fit was given one"}
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
-            "solved_on": "the ARKit shape set's skin",
+            **({"note": found["note"]} if "note" in found else {}), "solved_on": "the ARKit shape set's skin",
             "generic": fit_details.get("expression", {}).get("weights", {})}
 
 
