@@ -45,6 +45,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
+from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
 from ..geometry.tps import ThinPlateSpline
 
@@ -146,7 +147,10 @@ class _Residuals:
         j = self.tree.query(X)[1]
         c, nrm = self.V_tgt[j], self.N_tgt[j]
         d = np.abs(np.einsum("ij,ij->i", X - c, nrm))
-        normals = _turned(vertex_normals(pose(self.V_src, self.basis, theta), self.F_src)[self.idx], self.V_src[self.idx], X)
+        # the source normals turned by the sample's best rotation onto its warp (the face's warp is
+        # close to a similarity): enough to reject a match facing the other way
+        turn = similarity(self.V_src[self.idx], X)[1]
+        normals = vertex_normals(pose(self.V_src, self.basis, theta), self.F_src)[self.idx] @ turn.T
         keep = (d <= 5.0 * np.median(d) + 1e-12) & (np.einsum("ij,ij->i", normals, nrm) >= np.cos(np.radians(MAX_ANGLE)))
         return c, nrm, keep
 
@@ -184,7 +188,7 @@ def _gauss_newton(res, free, lo, hi, rounds, theta=None):
     for _ in range(rounds):
         target = res.matches(theta)
         r0 = res(theta, *target)
-        now = float(np.mean(r0 ** 2) + res.penalty @ theta ** 2)
+        now = res.cost(theta, target)
         first = now if first is None else first
         J = res.jacobian(theta, target)[:, cols]
         # min ||J d + r0||^2 / m + sum pen (theta + d)^2 within the bounds, as len(cols) rows
@@ -296,14 +300,3 @@ def shape_set_expression(shapes, V_tgt, F_tgt, landmarks, identity=None, min_lan
     details = {}
     w = fit_expression(shapes.vertices, shapes.faces, P, Q, V_tgt, F_tgt, space, identity, details=details)
     return dict(zip(space["names"], (float(x) for x in w))), details
-
-
-def _turned(normals, A, B):
-    """``normals`` (m, 3) turned by the rotation that best takes the points ``A`` (m, 3) onto ``B``
-    (m, 3) (Kabsch): the warp of the face is close to a similarity, and the turned source normals
-    are enough to reject a match facing the other way without warping the normals themselves."""
-    A, B = A - A.mean(axis=0), B - B.mean(axis=0)
-    U, _, Vt = np.linalg.svd(A.T @ B)
-    if np.linalg.det(U @ Vt) < 0:
-        U = U * np.array([1.0, 1.0, -1.0])
-    return normals @ (U @ Vt)

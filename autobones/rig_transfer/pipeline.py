@@ -85,6 +85,16 @@ def detect_generic_landmarks(generic):
         return None
 
 
+def _rig_folder(rig):
+    """The absolute folder a ``rig`` argument names (None: the built-in rig's), or None for a rig
+    given as an object: the key of the per-folder memos below."""
+    if rig is not None and not isinstance(rig, (str, os.PathLike)):
+        return None
+    from ..generic_rig import default_rig_path
+
+    return os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
+
+
 @functools.lru_cache(maxsize=4)
 def _detect_in_folder(folder, mesh_mtime_ns):
     # a pure function of the folder's skin: the file's time stamp is part of the key, so an
@@ -102,10 +112,8 @@ def generic_detected_landmarks(generic, rig=None):
     batch of automatic-landmark transfers detects on the generic skin once per worker; a
     :class:`LabelledRig` object is detected each call (nothing is stored on it).
     """
-    if rig is None or isinstance(rig, (str, os.PathLike)):
-        from ..generic_rig import default_rig_path
-
-        folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
+    folder = _rig_folder(rig)
+    if folder is not None:
         return _detect_in_folder(folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
     return detect_generic_landmarks(generic)
 
@@ -126,10 +134,8 @@ def generic_jaw_prior(generic, rig=None):
     """
     if not {"jaw", "head"} <= set(generic.skeleton.names):
         return None
-    if rig is None or isinstance(rig, (str, os.PathLike)):
-        from ..generic_rig import default_rig_path
-
-        folder = os.path.abspath(os.fspath(default_rig_path() if rig is None else rig))
+    folder = _rig_folder(rig)
+    if folder is not None:
         return _jaw_prior_in_folder(folder, os.stat(os.path.join(folder, "mesh.obj")).st_mtime_ns)
     return jaw_prior(generic)
 
@@ -150,11 +156,10 @@ def generic_expression_space(generic, rig=None):
     own skin, ``expressions.npz`` in its folder (``names`` (k,), ``basis`` (k, n, 3) float16; the
     built-in rig's from ``generic_rig/build_expression_space.py``). None for a rig folder without
     the file, or a rig given as an object, or a file for another skin."""
-    if rig is not None and not isinstance(rig, (str, os.PathLike)):
+    folder = _rig_folder(rig)
+    if folder is None:
         return None
-    from ..generic_rig import default_rig_path
-
-    path = os.path.join(os.path.abspath(os.fspath(default_rig_path() if rig is None else rig)), EXPRESSION_FILE)
+    path = os.path.join(folder, EXPRESSION_FILE)
     if not os.path.isfile(path):
         return None
     space = _expressions_in_folder(path, os.stat(path).st_mtime_ns)
