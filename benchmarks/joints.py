@@ -27,7 +27,7 @@ the occiput-C1 centre of rotation 22.5 mm posterior and 22.6 mm inferior of the 
 Bounds (issue #32, human heads): P head <= 0.15 and P mid <= 0.02; T head <= 0.15, T jaw <= 0.15. Animals
 and cartoons: the zone checks. A cell shows the as-is figure, then the worst copy's when it differs
 (``0.071 / 0.090 rot2``); ``verdict`` lists what fails. Transfer is given the tragions (its joints are
-then placed from them, ``rig_transfer/pipeline.anchor_joints_at_the_ears``): ``T head`` / ``T jaw`` measure
+then placed from them, ``rig_transfer/joints.anchor_joints_at_the_ears``): ``T head`` / ``T jaw`` measure
 that step and the landmarks' similarity, not the dense warp.
 """
 from __future__ import annotations

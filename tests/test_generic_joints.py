@@ -153,3 +153,31 @@ def test_transfer_anchors_head_and_jaw_at_the_ears(stretched):
 def test_transfer_without_ear_landmarks_keeps_the_carried_joints(ict):
     rig, _ = ict
     assert rig.options["joints_from_ears"] == []
+    assert rig.options["joints_on_midplane"] == ["head", "jaw"]
+
+
+def test_transfer_without_ear_landmarks_centres_head_and_jaw():
+    """A lopsided head (its left side 20% wider, its face turned 6 degrees on its skull) without ear
+    landmarks: the warp carries the joints off the landmarks' midplane; they are put on it."""
+    from autobones.landmarks.refine import symmetry_plane
+
+    V, F = load_mesh(default_head_path())
+    lm = read_landmarks(default_landmarks_path())
+
+    def lopsided(P):
+        P = np.array(P, dtype=np.float64)
+        P[:, 0] = np.where(P[:, 0] > 0, 1.2 * P[:, 0], P[:, 0])
+        t = np.radians(6.0) * np.clip(P[:, 2] / np.ptp(V[:, 2]), 0.0, None)   # the front turns, not the back
+        x, z = P[:, 0].copy(), P[:, 2].copy()
+        P[:, 0], P[:, 2] = np.cos(t) * x + np.sin(t) * z, -np.sin(t) * x + np.cos(t) * z
+        return P
+
+    marks = {k: lopsided(v[None])[0] for k, v in lm.items() if not k.startswith("tragion")}
+    rig = autobones.transfer((lopsided(V), F), marks)
+    assert rig.options["joints_from_ears"] == [] and rig.options["joints_on_midplane"] == ["head", "jaw"]
+    normal, offset = symmetry_plane({k: v for k, v in marks.items()})
+    size = float(np.ptp(V, axis=0).max())
+    for name in ("head", "jaw"):
+        assert abs(float(joint(rig.skeleton, name) @ normal) - offset) < 1e-9 * size, name
+    sk = rig.skeleton
+    assert np.allclose(sk.tails[list(sk.names).index("neck")], joint(sk, "head"))

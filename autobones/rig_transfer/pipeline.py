@@ -32,6 +32,7 @@ import os
 import numpy as np
 
 from .correspondence import dense_correspondence
+from .joints import anchor_joints_at_the_ears
 from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
@@ -302,8 +303,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
     # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
-    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is
-    skeleton, from_ears = anchor_joints_at_the_ears(skeleton, generic, {n: lm[n] for n in shared}, V, F)
+    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is, and its
+    # landmark pairs where its midplane is
+    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, {n: lm[n] for n in shared}, V, F)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -332,6 +334,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "rig": rig_option,
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
                "joints_from_ears": from_ears,
+               "joints_on_midplane": on_midplane,
                "symmetric": symmetry.record_,
                "expression_fit": _expression_record(found_details, fit_details, expression_fit, space,
                                                     detected is not None),
@@ -369,93 +372,6 @@ def _expression_record(found, fit_details, asked, space, detected):
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
             **({"note": found["note"]} if "note" in found else {}), "solved_on": "the ARKit shape set's skin",
             "generic": fit_details.get("expression", {}).get("weights", {})}
-
-
-EAR_LANDMARKS = ("tragion_l", "tragion_r", "exocanthion_l", "exocanthion_r")
-
-
-def anchor_joints_at_the_ears(skeleton, generic, landmarks, V, F, names=("head", "jaw")):
-    """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to its ear canals.
-
-    The generic rig's joints are placed from its tragions (the occiput-C1 centre of rotation and the
-    condyles; Chancey, Ottaviano, Myers & Nightingale 2007, :mod:`autobones.rig_building.anatomy`).
-    The dense warp carries them by the whole head's shape, which on the zoo's SMPL heads put the
-    head joint 0.08-0.13 ex-ex off and the jaw 0.05-0.08. Here each joint is the head's tragion
-    midpoint plus the generic's offset from its own, turned by the landmarks' similarity (Umeyama
-    1991) and scaled by the ex-ex ratio (the measurement's own scaling): 0.03-0.05 and 0.01-0.02
-    ex-ex there; then put on the landmarks' midplane (``landmarks.refine.symmetry_plane``). A joint
-    that would fall outside the head (winding number below 1/2) is moved back toward the carried one
-    until inside, or left where the warp put it.
-
-    Parameters
-    ----------
-    skeleton : Skeleton
-        The carried skeleton, head frame.
-    generic : LabelledRig
-        The generic rig (its ``skeleton`` and ``landmarks``, its own frame).
-    landmarks : dict str -> (3,) float
-        The head's landmarks shared with the generic rig, head frame; without both tragions and
-        both exocanthions nothing moves.
-    V, F : (n, 3) float, (m, 3) int
-        The head.
-    names : tuple of str
-        Joints to anchor.
-
-    Returns
-    -------
-    (Skeleton, list of str)
-        The skeleton (a parent bone whose tail was at a moved joint follows it) and the joints moved.
-    """
-    from ..geometry.rotations import similarity
-    from ..landmarks.refine import symmetry_plane
-    from ..skeleton import Skeleton
-
-    G = generic.landmarks
-    if not all(n in landmarks and n in G for n in EAR_LANDMARKS):
-        return skeleton, []
-    shared = [n for n in landmarks if n in G]
-    P = np.array([G[n] for n in shared], dtype=np.float64)
-    Q = np.array([landmarks[n] for n in shared], dtype=np.float64)
-    _, R = similarity(P, Q)
-
-    def ears(L):
-        L = {n: np.asarray(L[n], dtype=np.float64) for n in EAR_LANDMARKS}
-        return 0.5 * (L["tragion_l"] + L["tragion_r"]), float(np.linalg.norm(L["exocanthion_l"] - L["exocanthion_r"]))
-
-    (ear_g, ex_g), (ear_t, ex_t) = ears(G), ears(landmarks)
-    # both joints are midline ones (the generic's are, rig_building.anatomy): the similarity's small
-    # roll and asymmetric tragions put them 0.02-0.04 ex-ex beside the landmarks' midplane on the cat
-    # and the stuffed toy (benchmarks/joints.py); they go onto it
-    normal, offset = symmetry_plane(landmarks)
-    heads, tails = np.array(skeleton.heads, dtype=np.float64), np.array(skeleton.tails, dtype=np.float64)
-    bones, gbones = list(skeleton.names), list(generic.skeleton.names)
-    size = float(np.ptp(V, axis=0).max())
-    moved = []
-    for name in (n for n in names if n in bones and n in gbones):
-        i = bones.index(name)
-        want = ear_t + (ex_t / ex_g) * (R @ (np.asarray(generic.skeleton.heads[gbones.index(name)]) - ear_g))
-        want = want - (float(want @ normal) - offset) * normal
-        p = _inside_toward(V, F, want, heads[i])
-        if p is None:
-            continue
-        # the bone ending at this joint (the neck's tail at the head joint) keeps meeting it
-        tails[np.linalg.norm(tails - heads[i], axis=1) <= 1e-9 * size] = p
-        heads[i] = p
-        moved.append(name)
-    return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), moved
-
-
-def _inside_toward(V, F, p, anchor, steps=20):
-    """``p`` (3,) if inside the head, else the first point inside on the way to ``anchor`` (3,), else
-    None. Inside: a winding number above 1/2, or at least the anchor's own where that is lower (an
-    open mouth or neck lowers it around a joint that is inside all the same)."""
-    import igl
-
-    Q = p + np.linspace(0.0, 1.0, steps + 1)[:, None] * (anchor - p)
-    w = igl.fast_winding_number(np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64),
-                                np.ascontiguousarray(Q))
-    inside = np.flatnonzero(w > min(0.5, w[-1] - 1e-9))
-    return Q[inside[0]] if len(inside) and inside[0] < steps else None
 
 
 def _head_landmarks(V, F, source, landmarks, generic, up, front):
