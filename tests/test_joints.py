@@ -1,12 +1,14 @@
 """autobones.placement.joints: the head joint at the occiput-C1 pivot and the neck joint at the neck's base
 (issue #32), on a synthetic head on a neck on shoulders and on the test heads; the cues in the sidecar."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 
 import autobones
+from autobones.io.mesh import load_mesh
 from autobones.geometry.sample import sample_surface
 from autobones.geometry.head_share import face_only, neck_base_height
 from autobones.placement.joints import PIVOT_DOWN, find_joints
@@ -127,3 +129,30 @@ def test_sidecar_names_the_cues_and_keeps_them(rigs, tmp_path):
     rig.save(out)
     back = autobones.load_rig(out)
     assert back.sidecar()["joints"] == joints
+
+
+def test_face_mask_pivot_from_the_nose():
+    """A face mask (ICT identity000 cut 0.3 ex-ex behind its ear canals) and James' scan: the pivot
+    behind the nose by the mask's width (``nose`` cues), near Chancey's occiput-C1 centre from the
+    tragions (22.5 mm behind, 22.6 mm below them, x ex-ex / 90 mm). Measured 0.118 and 0.191 ex-ex;
+    by the mask's proportions they were 1.85 and 0.389."""
+    from autobones.io.landmarks import read_landmarks
+    from autobones.orient import frame_from_landmarks
+
+    here = Path(__file__).parent / "landmarks"
+    for rel, cut in (("ict/identity000", 0.3), ("menpo3d/james", None)):
+        V, F = load_mesh(data(rel + ".obj"))[:2]
+        lm = {k: np.asarray(v, float) for k, v in read_landmarks(data(rel + ".landmarks.json")).items()}
+        lm.update({k: np.asarray(v, float) for k, v in read_landmarks(here / f"{rel.split('/')[1]}.tragions.json").items()})
+        frame = frame_from_landmarks(V, F, lm)
+        up, front = frame.rotation[1], frame.rotation[2]
+        ex = float(np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]))
+        ears = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
+        if cut is not None:
+            F = F[((V - ears) @ front > -cut * ex)[F].all(axis=1)]
+        rig = autobones.place((V, F))
+        cues = rig.sidecar()["joints"]["head"]["cues"]
+        assert "face_only" in cues and "nose" in cues, (rel, cues)
+        c1 = ears + ex / 90.0 * (-22.5 * front - 22.6 * up)
+        head = rig.skeleton.heads[list(rig.skeleton.names).index("head")]
+        assert np.linalg.norm(head - c1) < (0.15 if cut is not None else 0.25) * ex, rel

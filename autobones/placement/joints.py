@@ -27,7 +27,11 @@ The head joint (``head`` cues):
   head, and at most ``PIVOT_BACK_WIDTH`` of the section's width (a snout or a jaw far in front of
   the neck lengthens the section, not the skull's base);
 - ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
-  and no neck to measure: the pivot is placed by the mask's proportions, far behind it.
+  and no neck to measure: the pivot is placed far behind it, from the nose (``nose``: the midline
+  profile's most anterior point, and the mask's width there as the scale, ``nose_width``: on James and
+  the menpo template 0.191 / 0.173 ex-ex from Chancey's centre, most of it the mask's pitch in its
+  frame times the 1.5 ex-ex lever; the mask's proportions put them 0.389 / 0.297 off), or by its
+  proportions without a midline profile (``proportions``).
 
 The neck joint (``neck`` cues): ``neck_section``, the neck's narrowest horizontal section under the
 pivot (bounding width of an area-uniform sample, slab by slab), then ``shoulders``, where the
@@ -65,6 +69,9 @@ PIVOT_BACK_WIDTH = 0.4   # of the section's width: at most this far in front of 
 PIVOT_DOWN_MASK = 0.71   # a face mask: of its height below its top (vertex-menton: 0.70-0.72)
 PIVOT_BEHIND_MASK = 0.58  # a face mask: of its height behind its front (0.55-0.58)
 MASK_CHIN = 0.7          # a face mask's chin step lies at least this share of its height below its top
+MASK_BEHIND_NOSE = 1.52  # ex-ex: Chancey's centre behind the pronasale (1.35-1.61 on seven human heads)
+MASK_BELOW_NOSE = 0.30   # ex-ex: and below it (0.25-0.42)
+MASK_WIDTH = 2.0         # ex-ex: a head's width at the nose tip's height (1.66-2.13; James' and the template's masks 1.99 / 2.01)
 CHIN_CUT = 0.1          # of the height: a chin this close to the bottom is where the mesh ends
 MENTON_DEPTHS = 1.2    # vertex-menton in head depths, when no chin step is found (Farkas 1994)
 SLAB = 0.02            # head sizes: height of a profile slab
@@ -162,15 +169,8 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         head_cues.append("midline_top")
     length = head_length(prof, top)
     if face_mask:
-        # no back to measure the head's length on: vertex-menton from the chin step, else the
-        # mask's height (a mask spans about vertex to menton); the pivot lies far behind the mask
-        # (a step found in the mask's upper part is the nose or the lips of a face strip cut at the
-        # brow and the chin, not its chin: fran_cut's, upright, at 0.54 of its height)
-        by_chin = chin is not None and top - float(chin) >= MASK_CHIN * height
-        scale = top - float(chin) if by_chin else height
-        y_head = top - PIVOT_DOWN_MASK * scale
-        z_head = _front(prof, y_head) - PIVOT_BEHIND_MASK * scale
-        head_cues += ["face_only"] + (["chin"] if by_chin else [])
+        y_head, z_head, mask_cues = _mask_pivot(prof, top, bottom, chin)
+        head_cues += ["face_only"] + mask_cues
     else:
         # the head's height scale is its length, front to back, or the length its height down to
         # the chin implies (vertex-menton is MENTON_DEPTHS head lengths) when the mesh ends there and
@@ -203,6 +203,32 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
                   chin_front=_front(prof, menton), menton_source="proportions" if chin is None else "chin",
                   neck_section=None if neck is None else neck["height"],
                   cues={"head": head_cues, "neck": neck_cues})
+
+
+def _mask_pivot(prof, top, bottom, chin):
+    """(height, depth, cues) of a face mask's pivot, far behind the mask (module docstring).
+
+    From the nose (``nose``): the most anterior point of the midline profile, with the mask's width
+    there as the scale (``nose_width``): Chancey's centre lies ``MASK_BEHIND_NOSE`` ex-ex behind the
+    pronasale and ``MASK_BELOW_NOSE`` below it, and a head is ``MASK_WIDTH`` ex-ex wide at the nose.
+    A mask cut in front of the ears is narrower, and its pivot comes out nearer the face (ICT's
+    identities cut 0.5 ex-ex in front of the tragions: 0.38-0.39 ex-ex off), still nearer Chancey's
+    centre than the mask's height puts it (0.60-1.37: a mask's height is wherever it was cut, a neck
+    included). Without a midline profile, by its height (``proportions``): vertex-menton from the chin
+    step when one is found far enough down (``chin``)."""
+    mz = prof["mzmax"]
+    if np.isfinite(mz).any():
+        k = int(np.nanargmax(mz))
+        y_nose, z_nose = float(prof["y"][k]), float(mz[k])
+        width = _at(prof, "xmax", y_nose) - _at(prof, "xmin", y_nose)
+        if np.isfinite(width) and width > 0:
+            exex = width / MASK_WIDTH
+            return y_nose - MASK_BELOW_NOSE * exex, z_nose - MASK_BEHIND_NOSE * exex, ["nose", "nose_width"]
+    height = top - bottom
+    by_chin = chin is not None and top - float(chin) >= MASK_CHIN * height
+    scale = top - float(chin) if by_chin else height
+    y_head = top - PIVOT_DOWN_MASK * scale
+    return y_head, _front(prof, y_head) - PIVOT_BEHIND_MASK * scale, ["proportions"] + (["chin"] if by_chin else [])
 
 
 def head_length(prof, top, reach=0.5):
