@@ -82,7 +82,8 @@ from .jaw_seeds import (ABOVE_MARGIN, CORNER, INNER_BAND, INNER_DEPTH, INNER_FAC
 
 MAX_JUMP = 0.3          # the largest jaw-weight step allowed on an edge off the lip line
 TARGET_JUMP = 0.27      # what the repair aims for (a margin below MAX_JUMP)
-ROUNDS = 16             # smoothing rounds at most
+ROUNDS = 32             # smoothing rounds at most (16 left the SMPL man's chin-to-neck chain at 0.31: each round after
+                        # the springs reach SPRING_CAP pins one more vertex of a chain, and a coarse chin's chain is long)
 SPRING_CAP = 64.0        # the strongest spring, in the Laplacian's weights (an infeasible step stays local)
 RINGS = 8               # rings of edges around the springs that later rounds re-solve
 REACH = 0.4             # fu: vertices farther than this from any jaw weight keep theirs (0), unsolved
