@@ -76,8 +76,9 @@ def anchor_joints_at_the_ears(skeleton, generic, landmarks, V, F, names=("head",
         # the bone ending at this joint (the neck's tail at the head joint) keeps meeting it
         tails[np.linalg.norm(tails - heads[i], axis=1) <= 1e-9 * size] = p
         heads[i] = p
-        (anchored if from_ears is not None else centred).append(name)
-        if from_ears is not None and plane is not None:
+        if from_ears is not None:
+            anchored.append(name)
+        if plane is not None:
             centred.append(name)
     return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), anchored, centred
 
