@@ -40,6 +40,15 @@ def test_place_with_no_argument_rigs_the_default_head(tmp_path):
     np.testing.assert_allclose(W.sum(axis=1), 1.0, atol=1e-5)
 
 
+def test_place_says_when_the_head_is_a_face_mask(tmp_path):
+    mask = run(["place", data("misc/fran_cut.obj"), "-o", str(tmp_path / "mask.glb")], tmp_path)
+    assert mask.returncode == 0, mask.stderr
+    lines = mask.stdout.strip().splitlines()
+    assert len(lines) == 2 and lines[1].startswith("joints: a face mask"), mask.stdout
+    head = run(["place", data("misc/LeePerrySmith.obj"), "-o", str(tmp_path / "head.glb")], tmp_path)
+    assert head.returncode == 0 and "face mask" not in head.stdout, head.stdout
+
+
 def test_place_density_output_and_verbose(tmp_path):
     # the goat's frame as the user gives it (found from its shape alone it is the same: test_orient's
     # closed bust), so --up/--front, the documented recourse, is exercised
