@@ -324,3 +324,27 @@ def test_a_head_without_a_lip_line_says_so(rigs):
     note = rig.options["jaw"]
     assert "no lip line" in note and "menton" in note and "\n" not in note, note
     assert "jaw" not in rigs("goat")[3].options
+
+
+def test_a_step_against_a_seed_is_spread_down_a_chain_of_pins():
+    """A chin seed (1) whose neighbours the data term holds at 0 (the SMPL man's chin underside into its
+    neck): once an edge's spring reaches its cap the free end is pinned one allowed step below the seed,
+    then the next, each after its own springs' doublings. 16 rounds stopped at 1, 0.73, 0.46, 0 (a 0.46
+    step; 0.31 on the SMPL man); the chain needs 23-25."""
+    import scipy.sparse as sp
+
+    from autobones.rig_transfer import jaw as jaw_module
+
+    n = 12
+    E = np.c_[np.arange(n - 1), np.arange(1, n)]
+    A = sp.csr_matrix((np.ones(2 * (n - 1)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
+    L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
+    for hold in (1e2, 1e4):
+        value, fixed = np.zeros(n), np.zeros(n, dtype=bool)
+        value[0], fixed[0] = 1.0, True
+        x, rounds = jaw_module._solve(E, L, np.full(n, hold), np.zeros(n), value, fixed, np.zeros(n - 1, dtype=bool),
+                                      np.ones(n - 1, dtype=bool))
+        assert rounds < jaw_module.ROUNDS
+        assert np.abs(np.diff(x)).max() <= jaw_module.TARGET_JUMP + 1e-9
+        np.testing.assert_allclose(x[:4], [1.0, 0.73, 0.46, 0.19], atol=1e-6)
+        assert x[4:].max() < 0.01
