@@ -305,7 +305,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
     # canals' anatomy on the zoo's humans; where the head has tragions they say where it is, and its
     # landmark pairs where its midplane is
-    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, {n: lm[n] for n in shared}, V, F)
+    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, dst, V, F)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
