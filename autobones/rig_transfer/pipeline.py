@@ -240,15 +240,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("load")
     lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
     lap("landmarks")
-    src = {n: generic.landmarks[n] for n in shared}
-    if detected is not None:
-        # the same detector on the generic skin: its biases (brows, eye corners) then cancel
-        # instead of pulling the correspondence
-        mirror = generic_detected_landmarks(generic, rig)
-        if mirror is not None and all(n in mirror for n in shared):
-            src = {n: mirror[n] for n in shared}
-        lap("generic_landmarks")
-    dst = {n: lm[n] for n in shared}
+    src, dst = _landmark_pairs(generic, rig, lm, shared, detected, lap)
     # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there the
     # correspondence is kept symmetric (not with automatic landmarks, whose mirror plane is a degree off);
     # the rig's own landmarks give its exact plane
@@ -257,76 +249,25 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     fit_options.setdefault("symmetry", symmetry.fit_option())
     lap("symmetry")
     rig_option = "built-in" if rig is None else str(rig) if isinstance(rig, (str, os.PathLike)) else "object"
-    found, found_details = {}, {}
-    space = generic_expression_space(generic, rig) if expression_fit and "expressions" not in fit_options else None
-    if space is not None or arkit:
-        from ..arkit.targets import rig_shape_set
-
-        shapes = rig_shape_set(rig_option)
-        if shapes.identity is None or detected is not None:
-            # without identity modes a face's own shape is taken for an expression, and the detector's
-            # biases against the set's hand-placed landmarks are (a neutral ICT identity gained 0.47)
-            space = None
-    if space is not None:
-        # the expression solved on the ARKit set's skin (a real face, with its identity modes: what its
-        # warp leaves between the landmarks is then the expression; on the generic's own skin it would
-        # be the generic's identity) and worn by the generic skin in its fit
-        found, found_details = shape_set_expression(shapes, V, F, lm, identity=shapes.identity)
-        lap("expression")
-    pending = None
-    if arkit:
-        # the ARKit shape set's own correspondence needs only the head and its landmarks: fitted on the
-        # second core while this thread fits the generic rig (most of both runs outside the GIL)
-        from concurrent.futures import ThreadPoolExecutor
-
-        from ..arkit.targets import shape_correspondence
-
-        pool = ThreadPoolExecutor(1)
-        pending = pool.submit(shape_correspondence, shapes, V, F, lm)
-        pool.shutdown(wait=False)  # the worker ends with its one task
-    fit_timings = {}
-    if "jaw" not in fit_options:
-        # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
-        # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
-        fit_options["jaw"] = generic_jaw_prior(generic, rig)
-    if "expressions" not in fit_options:
-        fit_options["expressions"] = {**space, "weights": found} if any(found.values()) else None
-    fit_details = {}
-    P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
-                                       details=fit_details, **fit_options)
-    timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
+    shapes, space, found, found_details = _head_expression(generic, rig, rig_option, V, F, lm, detected,
+                                                           expression_fit and "expressions" not in fit_options,
+                                                           arkit, lap)
+    # the ARKit shape set's own correspondence needs only the head and its landmarks: fitted on the
+    # second core while this thread fits the generic rig (most of both runs outside the GIL)
+    pending = _in_background(shapes, V, F, lm) if arkit else None
+    P, ok, fit_details = _fit(generic, rig, V, F, src, dst, space, found, fit_options, timings)
     if details is not None:
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
-    partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
-    under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
-    skeleton = generic.skeleton.transformed(under.transform)
-    # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
-    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is, and its
-    # landmark pairs where its midplane is
-    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, dst, V, F)
+    under, skeleton, from_ears, on_midplane = _under_skin(generic, P, ok, control_points, symmetry, dst, V, F)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
     lap("attributes")
-    labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(len(V), np.int8)
-    facial_mask = labels == 0
-    if "region" in fields and "region" in generic.labels and "neck" in generic.labels["region"]:
-        facial_mask &= fields["region"] != generic.labels["region"].index("neck")
-    # the neck base still on a head turn, the head/neck blend on the head joint (the generic's own blend
-    # lies far below it and the warp drags it anywhere: benchmarks zoo check 3); the face is untouched.
-    # Before the jaw's repair, which has the last word where the chin reaches the neck base (a chin at
-    # the mesh's bottom: the bunny) and keeps the jaw weight's falloff smooth
-    W, still = still_neck_base(V, F, W, skeleton, frame, lm, facial_mask)
-    lap("neck")
-    # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
-    jaw_details = {}
-    W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
-    if jaw_details.get("note"):
-        log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
-    lap("jaw")
+    labels, facial_mask = _face_labels(fields, generic, len(V))
+    W, jaw_note = _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap)
 
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
@@ -338,7 +279,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "symmetric": symmetry.record_,
                "expression_fit": _expression_record(found_details, fit_details, expression_fit, space,
                                                     detected is not None),
-               **({"jaw": jaw_details["note"]} if jaw_details.get("note") else {})}
+               **({"jaw": jaw_note} if jaw_note else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
@@ -355,6 +296,118 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         out.options["arkit"] = True
         lap("arkit")
     return out
+
+
+def _under_skin(generic, P, ok, control_points, symmetry, dst, V, F):
+    """(under, skeleton, from_ears, on_midplane): the under-skin warp fitted on the correspondence
+    ``P`` (n_rig, 3) where ``ok``, and the generic skeleton carried by it, its head and jaw then placed
+    by the head's ears and midplane (:func:`anchor_joints_at_the_ears`; ``dst`` the head's shared
+    landmarks)."""
+    partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
+    under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
+    skeleton = generic.skeleton.transformed(under.transform)
+    # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
+    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is, and its
+    # landmark pairs where its midplane is
+    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, dst, V, F)
+    return under, skeleton, from_ears, on_midplane
+
+
+def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap):
+    """(W, note): the carried weights ``W`` (n, b) with the neck base made still and the jaw weight
+    repaired from the landmarks ``lm``; ``note`` says why the jaw could not be cut cleanly, or None."""
+    # the neck base still on a head turn, the head/neck blend on the head joint (the generic's own blend
+    # lies far below it and the warp drags it anywhere: benchmarks zoo check 3); the face is untouched.
+    # Before the jaw's repair, which has the last word where the chin reaches the neck base (a chin at
+    # the mesh's bottom: the bunny) and keeps the jaw weight's falloff smooth
+    W, still = still_neck_base(V, F, W, skeleton, frame, lm, facial_mask)
+    lap("neck")
+    # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
+    jaw_details = {}
+    W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
+    if jaw_details.get("note"):
+        log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
+    lap("jaw")
+    return W, jaw_details.get("note")
+
+
+def _landmark_pairs(generic, rig, lm, shared, detected, lap):
+    """(src, dst): the ``shared`` names' points on the generic skin and on the head (dicts str -> (3,)).
+    With automatic landmarks the generic's points are the same detector's on its own skin (when it
+    finds every shared name), so the detector's biases (brows, eye corners) cancel instead of pulling
+    the correspondence."""
+    src = {n: generic.landmarks[n] for n in shared}
+    if detected is not None:
+        mirror = generic_detected_landmarks(generic, rig)
+        if mirror is not None and all(n in mirror for n in shared):
+            src = {n: mirror[n] for n in shared}
+        lap("generic_landmarks")
+    return src, {n: lm[n] for n in shared}
+
+
+def _head_expression(generic, rig, rig_option, V, F, lm, detected, fit, arkit, lap):
+    """(shapes, space, found, found_details): the ARKit shape set (None unless needed), the generic's
+    expression space (None: the fit stays neutral), and the expression the head seems to wear
+    ({name: weight} and the solve's record; empty when not solved).
+
+    The expression is solved on the ARKit set's skin (a real face, with its identity modes: what its
+    warp leaves between the landmarks is then the expression; on the generic's own skin it would be
+    the generic's identity) and worn by the generic skin in its fit. ``fit``: the caller asked for the
+    expression-aware fit and gave no space of its own."""
+    shapes, found, found_details = None, {}, {}
+    space = generic_expression_space(generic, rig) if fit else None
+    if space is not None or arkit:
+        from ..arkit.targets import rig_shape_set
+
+        shapes = rig_shape_set(rig_option)
+        if shapes.identity is None or detected is not None:
+            # without identity modes a face's own shape is taken for an expression, and the detector's
+            # biases against the set's hand-placed landmarks are (a neutral ICT identity gained 0.47)
+            space = None
+    if space is not None:
+        found, found_details = shape_set_expression(shapes, V, F, lm, identity=shapes.identity)
+        lap("expression")
+    return shapes, space, found, found_details
+
+
+def _in_background(shapes, V, F, lm):
+    """A future of :func:`autobones.arkit.targets.shape_correspondence` on one worker thread."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ..arkit.targets import shape_correspondence
+
+    pool = ThreadPoolExecutor(1)
+    pending = pool.submit(shape_correspondence, shapes, V, F, lm)
+    pool.shutdown(wait=False)  # the worker ends with its one task
+    return pending
+
+
+def _fit(generic, rig, V, F, src, dst, space, found, fit_options, timings):
+    """The dense correspondence of the generic skin on the head: ``P`` (n_rig, 3) each generic vertex's
+    point on the head (input frame), ``ok`` (n_rig,) bool reliable, and the fit's details; its
+    timings go into ``timings`` as ``fit_*``. ``fit_options`` (the caller's, completed here: the jaw
+    prior and the expression worn unless given) is changed in place."""
+    if "jaw" not in fit_options:
+        # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
+        # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
+        fit_options["jaw"] = generic_jaw_prior(generic, rig)
+    if "expressions" not in fit_options:
+        fit_options["expressions"] = {**space, "weights": found} if any(found.values()) else None
+    fit_timings, fit_details = {}, {}
+    P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
+                                       details=fit_details, **fit_options)
+    timings.update({f"fit_{k}": v for k, v in fit_timings.items()})
+    return P, ok, fit_details
+
+
+def _face_labels(fields, generic, n):
+    """(labels, facial_mask): the carried depth groups ((n,) int8, 0 the face) and the face without the
+    generic's neck region ((n,) bool)."""
+    labels = fields["depth_group"].astype(np.int8) if "depth_group" in fields else np.zeros(n, np.int8)
+    facial_mask = labels == 0
+    if "region" in fields and "region" in generic.labels and "neck" in generic.labels["region"]:
+        facial_mask &= fields["region"] != generic.labels["region"].index("neck")
+    return labels, facial_mask
 
 
 def _expression_record(found, fit_details, asked, space, detected):
