@@ -4,11 +4,11 @@
 (:mod:`.under_skin`), which follows the whole head's shape: on the zoo's SMPL heads it put the head
 joint 0.08-0.13 ex-ex from the occiput-C1 centre and the jaw 0.05-0.08 from the condyle, and on
 heads without ear landmarks 0.04-0.06 ex-ex beside the landmarks' midplane (James, the bunny:
-``benchmarks/zoo.py`` check 4). Where the landmarks stop at the face (the detector's 27 names, a
-face scan's file), the warp extrapolates the generic's back of the head from the face alone: its
-head joint 0.15-0.40 ex-ex from the occiput-C1 centre on James, the menpo template, ICT's
-identities and Lee Perry-Smith, its jaw 0.23-0.42 from the condyle, and 0.24-0.57 / 0.27-0.62 on
-the same heads cut into masks behind or in front of their ears (``benchmarks/joints.py --without-ears``).
+``benchmarks/zoo.py`` check 4). Where a landmark file stops at the face (a face scan's, a mask's),
+the warp extrapolates the generic's back of the head from the face alone: on the eight human heads of
+the shared data given only their face's landmarks it put the head joint 0.10-0.40 ex-ex from the
+occiput-C1 centre and the jaw 0.15-0.42 from the condyle, on the same heads cut into masks behind or
+in front of their ears up to 0.57 and 0.49 (``benchmarks/joints.py --given face``).
 Both joints are midline ones (the generic's are, :mod:`autobones.rig_building.anatomy`).
 """
 from __future__ import annotations
@@ -24,13 +24,15 @@ MIN_PAIRS = 2   # left/right landmark pairs needed to say where the midplane is
 # off by the warp, 0.12-0.13 by the face's similarity)
 BACK_LANDMARKS = ("tragion_l", "tragion_r", "opisthocranion", "vertex", "gonion_l", "gonion_r")
 MIN_FACE = 6        # landmarks the face's similarity needs
+JAW_CARRIED = ("menton", "pogonion", "labiale_inferius", "sublabiale")   # move with an open jaw
 # ex-ex: the largest RMS residual of the face's similarity to the generic's landmarks for a human face
 # (the zoo's and shared humans 0.070-0.086; its animals, cartoons, toys and robot 0.136-0.418, whose
 # joints the warp places better: a human's proportions put a cat's head joint 0.84 ex-ex off, the warp 0.67)
 HUMAN_FIT = 0.1
 
 
-def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=False, names=("head", "jaw")):
+def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=False, by_face=True,
+                  names=("head", "jaw")):
     """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
     ear canals, or else to its human face, and onto the landmarks' midplane.
 
@@ -43,7 +45,8 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
     the face (none of ``BACK_LANDMARKS``: ears, back and top of the head, the jaw's angles; at least ``MIN_FACE`` shared with the generic; the
     similarity's RMS residual within ``HUMAN_FIT`` ex-ex), each joint is the generic's mapped by the
     landmarks' similarity: 0.09-0.21 ex-ex from the occiput-C1 centre and 0.11-0.21 from the condyle
-    on those heads, whole or cut into masks. Either way, with at least ``MIN_PAIRS`` left/right
+    on those heads, whole or cut into masks (the beast, a sculpted monster whose face's landmarks fit a
+    human's, 0.08, gets its jaw 0.18 from the condyle, the warp's 0.07). Either way, with at least ``MIN_PAIRS`` left/right
     pairs, each joint then goes onto the landmarks' midplane (``landmarks.refine.symmetry_plane``):
     the similarity's small roll and asymmetric tragions put them 0.02-0.04 ex-ex beside it on the
     cat and the stuffed toy, the warp 0.04-0.06 on James. A joint that would fall outside the head
@@ -65,6 +68,11 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
         when the head's were detected, so their biases cancel); default ``generic.landmarks``.
     face_mask : bool
         The head is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
+    by_face : bool
+        Whether a face's similarity may place the joints. Not for automatic landmarks: with the
+        detector's on both skins the warp has nothing to unlearn, and it put the head joint of ICT's
+        identities and James 0.03-0.07 ex-ex from the occiput-C1 centre, the similarity 0.10-0.22
+        (the SMPL heads and Lee Perry-Smith: warp 0.14-0.17, similarity 0.10-0.14).
     names : tuple of str
         Joints to place.
 
@@ -79,7 +87,7 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
 
     G = generic.landmarks if source is None else source
     from_ears = _from_the_ears(G, landmarks)
-    from_face = None if from_ears is not None else _from_the_face(G, landmarks)
+    from_face = None if from_ears is not None or not by_face else _from_the_face(G, landmarks)
     mapped = from_ears or from_face
     pairs = sum(1 for n in landmarks if n.endswith("_l") and mirror_name(n) in landmarks)
     plane = symmetry_plane(landmarks) if pairs >= MIN_PAIRS else None
@@ -111,21 +119,33 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
 def _from_the_face(G, landmarks):
     """A map from a generic joint (3,) to where it goes on a human face by the landmarks' similarity
     (Umeyama 1991) from the generic's ``G``, or None: landmarks behind the face, fewer than
-    ``MIN_FACE`` shared, or a face no similarity of the generic's fits (an animal's, a cartoon's)."""
+    ``MIN_FACE`` shared, or a face no similarity of the generic's fits (an animal's, a cartoon's).
+
+    The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
+    animals' so); the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
+    are ``MIN_FACE`` of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them,
+    0.08 without, and a neutral face's joints 0.00-0.02 either way."""
     from ..geometry.rotations import similarity
 
     shared = [n for n in landmarks if n in G]
     if any(n in landmarks for n in BACK_LANDMARKS) or len(shared) < MIN_FACE \
             or not all(n in G for n in ("exocanthion_l", "exocanthion_r")):
         return None
-    P = np.array([G[n] for n in shared], dtype=np.float64)
-    Q = np.array([landmarks[n] for n in shared], dtype=np.float64)
-    s, R = similarity(P, Q)
-    p0, q0 = P.mean(axis=0), Q.mean(axis=0)
-    residual = np.sqrt((((Q - q0) - s * (P - p0) @ R.T) ** 2).sum(axis=1).mean())
+
+    def fit(names):
+        P = np.array([G[n] for n in names], dtype=np.float64)
+        Q = np.array([landmarks[n] for n in names], dtype=np.float64)
+        s, R = similarity(P, Q)
+        p0, q0 = P.mean(axis=0), Q.mean(axis=0)
+        return s, R, p0, q0, np.sqrt((((Q - q0) - s * (P - p0) @ R.T) ** 2).sum(axis=1).mean())
+
+    s, R, p0, q0, residual = fit(shared)
     exex = s * float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
     if not residual <= HUMAN_FIT * exex:
         return None
+    upper = [n for n in shared if n not in JAW_CARRIED]
+    if len(upper) >= MIN_FACE:
+        s, R, p0, q0, _ = fit(upper)
     return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
 
 

@@ -262,7 +262,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
-    under, skeleton, placed = _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame)
+    under, skeleton, placed = _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
+                                          by_face=detected is None)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -301,12 +302,12 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame):
+def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True):
     """(under, skeleton, placed): the under-skin warp fitted on the correspondence ``P`` (n_rig, 3)
     where ``ok``, and the generic skeleton carried by it, its head and jaw then placed by the head's
     ears or face and its midplane (:func:`~.joints.anchor_joints`: ``placed`` says which; ``src`` and
     ``dst`` the shared landmarks on the generic and on the head; ``frame`` the head's, which tells a face
-    mask)."""
+    mask; ``by_face`` False for automatic landmarks)."""
     partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
@@ -315,7 +316,7 @@ def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame)
     # where the head has tragions they say where the joints are, else a human face's landmarks, and its
     # landmark pairs where its midplane is
     mask = face_only(frame.to_canonical(V), F)
-    skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, face_mask=mask)
+    skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, face_mask=mask, by_face=by_face)
     return under, skeleton, placed
 
 
