@@ -44,13 +44,14 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
     midpoint plus the generic's offset from its own, turned by the landmarks' similarity (Umeyama
     1991) and scaled by the ex-ex ratio (the measurement's own scaling): 0.03-0.05 and 0.01-0.02
     ex-ex from the anatomy on the SMPL heads. Without them, on a human face whose landmarks stop at
-    the face (none of ``BACK_LANDMARKS``: ears, back and top of the head, the jaw's angles; at least ``MIN_FACE`` shared with the generic; the
-    similarity's RMS residual within ``HUMAN_FIT`` ex-ex), each joint is the generic's mapped by the
-    landmarks' similarity (fitted on the names the jaw does not carry): 0.09-0.22 ex-ex from the
-    occiput-C1 centre and 0.11-0.22 from the condyle on those heads, whole or cut into masks (the
-    beast, a sculpted monster whose face's landmarks fit a human's, 0.08, gets its jaw 0.21 from the
-    condyle, the warp's 0.07). Either way, with at least ``MIN_PAIRS`` left/right
-    pairs, each joint then goes onto the landmarks' midplane (``landmarks.refine.symmetry_plane``):
+    the face (none of ``BACK_LANDMARKS``: the ears, the back and top of the head, the jaw's angles; at
+    least ``MIN_FACE`` shared with the generic; the similarity's RMS residual within ``HUMAN_FIT``
+    ex-ex), each joint is the generic's mapped by the landmarks' similarity (fitted on the names the
+    jaw does not carry): 0.09-0.22 ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on
+    those heads, whole or cut into masks (the beast, a sculpted monster whose face's landmarks fit a
+    human's, 0.08, gets its jaw 0.21 from the condyle, the warp's 0.07). Either way, with at least
+    ``MIN_PAIRS`` left/right pairs, each joint then goes onto the landmarks' midplane
+    (``landmarks.refine.symmetry_plane``):
     the similarity's small roll and asymmetric tragions put them 0.02-0.04 ex-ex beside it on the
     cat and the stuffed toy, the warp 0.04-0.06 on James. A joint that would fall outside the head
     (winding number below 1/2) is moved back toward the carried one until inside, or left where the
