@@ -2,6 +2,7 @@
 
     python benchmarks/joints.py                       # every head with tragions, as is, 2 rotations, x1000
     python benchmarks/joints.py --heads human_man,james --variants as-is --markdown
+    python benchmarks/joints.py --given face --variants as-is,mask-behind,mask-front   # landmarks that stop at the face
 
 Heads: every landmarked head ``benchmarks/zoo.py`` knows (``../shared/data``'s zoo, james, template, ICT
 identities 000-002, the goat and the robot; LeePerrySmith with the landmarks ``autobones.detect_landmarks``
@@ -27,8 +28,11 @@ the occiput-C1 centre of rotation 22.5 mm posterior and 22.6 mm inferior of the 
 Bounds (issue #32, human heads): P head <= 0.15 and P mid <= 0.02; T head <= 0.15, T jaw <= 0.15. Animals
 and cartoons: the zone checks. A cell shows the as-is figure, then the worst copy's when it differs
 (``0.071 / 0.090 rot2``); ``verdict`` lists what fails. Transfer is given the tragions (its joints are
-then placed from them, ``rig_transfer/joints.anchor_joints_at_the_ears``): ``T head`` / ``T jaw`` measure
-that step and the landmarks' similarity, not the dense warp.
+then placed from them, ``rig_transfer/joints.anchor_joints``): ``T head`` / ``T jaw`` measure
+that step and the landmarks' similarity, not the dense warp. ``--given face``: transfer is given only
+the face's landmarks (no ears, no back of the head: ``FACE_ONLY`` dropped), as from the detector or a face
+scan's file. Opt-in copies (heads with tragions): ``mask-behind`` / ``mask-front``, the head cut into a
+face mask by a plane 0.3 ex-ex behind / 0.5 ex-ex in front of the tragions' midpoint (landmarks' front).
 """
 from __future__ import annotations
 
@@ -49,6 +53,9 @@ from autobones.io.landmarks import read_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
 
 VARIANTS = ("as-is", "rot1", "rot2", "x1000")
+MASKS = {"mask-behind": -0.3, "mask-front": 0.5}   # ex-ex from the tragions' midpoint along the front
+# what a face's landmarks lack (``--given face``): the ears and the back of the head
+FACE_ONLY = ("tragion", "superaurale", "subaurale", "otobasion", "opisthocranion", "vertex", "gonion")
 CONDYLE_MM = 12.0
 BOUND = 0.15          # ex-ex: occiput-C1 and condyle (humans)
 COLUMNS = ("P head", "T head", "T jaw", "P mid", "T mid", "P neck", "P zone", "T zone")
@@ -112,17 +119,31 @@ def measure(var, ref, prig, trig):
     return out
 
 
-def run_head(name, mesh, lm, variants):
-    """{variant: {figure: value}} for one head; a failed rig is an error string in its figures."""
+def mask(V, F, lm, ref, ahead):
+    """The head cut into a face mask: the faces wholly more than ``ahead`` ex-ex in front of the
+    tragions' midpoint (landmarks' front), vertices compacted; the landmarks as they are."""
+    mid = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
+    keep = ((V - mid) @ ref["front"] > ahead * zc.unit(lm, V))[F].all(axis=1)
+    Vc, Fc = zc.compact(V, F[keep])
+    return zc.Variant("mask", Vc, Fc, lm, lm, core=np.ones(len(Vc), dtype=bool))
+
+
+def run_head(name, mesh, lm, variants, given="all"):
+    """{variant: {figure: value}} for one head; a failed rig is an error string in its figures.
+    ``given``: "all" the landmarks transfer is given, "face" without ``FACE_ONLY``'s names."""
     V, F = load_mesh(mesh)
     ref0 = zc.landmark_frame(V, F, lm)
     found = {}
     for vname in variants:
-        var = zc.make_variant(vname, V, F, lm, zlib.crc32(name.encode()))
+        if vname in MASKS and "tragion_l" not in lm:
+            continue
+        var = mask(V, F, lm, ref0, MASKS[vname]) if vname in MASKS else \
+            zc.make_variant(vname, V, F, lm, zlib.crc32(name.encode()))
         ref = zoo.turned(ref0, var.R)
+        to_transfer = var.lm if given == "all" else {n: p for n, p in var.lm.items() if not n.startswith(FACE_ONLY)}
         t = time.perf_counter()
         prig, perr = zoo.attempt(lambda: autobones.place((var.V, var.F)))
-        trig, terr = zoo.attempt(lambda: autobones.transfer((var.V, var.F), var.lm))
+        trig, terr = zoo.attempt(lambda: autobones.transfer((var.V, var.F), to_transfer))
         found[vname] = measure(var, ref, prig, trig)
         for label, err in (("P", perr), ("T", terr)):
             if err is not None:
@@ -204,6 +225,8 @@ def main(argv=None):
     ap.add_argument("--data", default=str(zoo.DATA))
     ap.add_argument("--heads", help="comma-separated names (default: every landmarked head)")
     ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--given", choices=("all", "face"), default="all",
+                    help="the landmarks transfer is given: all, or the face's only (no ears, no back of the head)")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args(argv)
     known = heads(Path(args.data))
@@ -213,14 +236,15 @@ def main(argv=None):
         mesh, lm = known[name]
         human = name in zoo.HUMAN
         zoo.log(f"{name}")
-        found = run_head(name, mesh, lm, args.variants.split(","))
+        found = run_head(name, mesh, lm, args.variants.split(","), args.given)
         kind = ("human" if human else "animal/cartoon") + ("" if "tragion_l" in lm else ", no tragions")
         rows.append((name, kind, *(cell(found, c) for c in ("P head", "T head", "T jaw", "P mid", "T mid")),
                      neck_cell(found), zone_cell(found, "P zone"), zone_cell(found, "T zone"),
                      verdict(name, found, human)))
     print(table(rows, args.markdown))
     passed = sum(r[-1] == "pass" for r in rows)
-    print(f"\n{passed} / {len(rows)} heads pass; variants {args.variants}; {time.perf_counter() - t0:.0f} s")
+    print(f"\n{passed} / {len(rows)} heads pass; variants {args.variants}; transfer given {args.given} landmarks; "
+          f"{time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":

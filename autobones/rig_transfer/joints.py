@@ -1,11 +1,15 @@
-"""The carried head and jaw joints put where the head's anatomy is: from its ear canals, on its midplane.
+"""The carried head and jaw joints put where the head's anatomy is: from its ear canals or its face, on its midplane.
 
 ``transfer`` carries the generic rig's skeleton by the under-skin warp of the dense correspondence
 (:mod:`.under_skin`), which follows the whole head's shape: on the zoo's SMPL heads it put the head
 joint 0.08-0.13 ex-ex from the occiput-C1 centre and the jaw 0.05-0.08 from the condyle, and on
 heads without ear landmarks 0.04-0.06 ex-ex beside the landmarks' midplane (James, the bunny:
-``benchmarks/zoo.py`` check 4). Both joints are midline ones (the generic's are,
-:mod:`autobones.rig_building.anatomy`).
+``benchmarks/zoo.py`` check 4). Where a landmark file stops at the face (a face scan's, a mask's),
+the warp extrapolates the generic's back of the head from the face alone: on the eight human heads of
+the shared data given only their face's landmarks it put the head joint 0.10-0.40 ex-ex from the
+occiput-C1 centre and the jaw 0.15-0.42 from the condyle, on the same heads cut into masks behind or
+in front of their ears up to 0.57 and 0.49 (``benchmarks/joints.py --given face``).
+Both joints are midline ones (the generic's are, :mod:`autobones.rig_building.anatomy`).
 """
 from __future__ import annotations
 
@@ -15,23 +19,43 @@ from ..io.landmark_names import mirror_name
 
 EAR_LANDMARKS = ("tragion_l", "tragion_r", "exocanthion_l", "exocanthion_r")
 MIN_PAIRS = 2   # left/right landmark pairs needed to say where the midplane is
+# landmarks beyond the face: with one the warp has the back or top of the head or the jaw's angle to
+# follow (the SMPL heads with opisthocranion, vertex and gonions but no tragions: head 0.06-0.09 ex-ex
+# off by the warp, 0.12-0.13 by the face's similarity)
+BACK_LANDMARKS = ("tragion_l", "tragion_r", "opisthocranion", "vertex", "gonion_l", "gonion_r")
+MIN_FACE = 6        # landmarks the face's similarity needs
+JAW_CARRIED = ("menton", "pogonion", "labiale_inferius", "sublabiale")   # move with an open jaw
+# ex-ex: the largest RMS residual of the face's similarity to the generic's landmarks (every shared name)
+# for a human face: the shared humans' face landmarks 0.043-0.082, ICT's generic head with its jaw open
+# 0.116; the zoo's animals, cartoons, toys and robot 0.135-0.422 (the ogre the nearest), whose joints the
+# warp places better (a human's proportions put a cat's head joint 0.84 ex-ex off, the warp 0.67). The
+# beast, a monster with a human face, measures 0.083 and takes a human's joints.
+HUMAN_FIT = 0.12
 
 
-def anchor_joints_at_the_ears(skeleton, generic, landmarks, V, F, names=("head", "jaw")):
-    """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to its ear
-    canals, and onto the landmarks' midplane.
+def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=False, by_face=True,
+                  names=("head", "jaw")):
+    """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
+    ear canals, or else to its human face, and onto the landmarks' midplane.
 
     The generic rig's joints are placed from its tragions (the occiput-C1 centre of rotation and the
     condyles; Chancey, Ottaviano, Myers & Nightingale 2007, :mod:`autobones.rig_building.anatomy`).
     Where the head has both tragions and both exocanthions, each joint is the head's tragion
     midpoint plus the generic's offset from its own, turned by the landmarks' similarity (Umeyama
     1991) and scaled by the ex-ex ratio (the measurement's own scaling): 0.03-0.05 and 0.01-0.02
-    ex-ex from the anatomy on the SMPL heads. Either way, with at least ``MIN_PAIRS`` left/right
-    pairs, each joint then goes onto the landmarks' midplane (``landmarks.refine.symmetry_plane``):
+    ex-ex from the anatomy on the SMPL heads. Without them, on a human face whose landmarks stop at
+    the face (none of ``BACK_LANDMARKS``: the ears, the back and top of the head, the jaw's angles; at
+    least ``MIN_FACE`` shared with the generic; the similarity's RMS residual within ``HUMAN_FIT``
+    ex-ex), each joint is the generic's mapped by the landmarks' similarity (fitted on the names the
+    jaw does not carry): 0.09-0.22 ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on
+    those heads, whole or cut into masks (the beast, a sculpted monster whose face's landmarks fit a
+    human's, 0.08, gets its jaw 0.21 from the condyle, the warp's 0.07). Either way, with at least
+    ``MIN_PAIRS`` left/right pairs, each joint then goes onto the landmarks' midplane
+    (``landmarks.refine.symmetry_plane``):
     the similarity's small roll and asymmetric tragions put them 0.02-0.04 ex-ex beside it on the
     cat and the stuffed toy, the warp 0.04-0.06 on James. A joint that would fall outside the head
     (winding number below 1/2) is moved back toward the carried one until inside, or left where the
-    warp put it.
+    warp put it; a face mask has no inside, and its joints stay behind it where the face puts them.
 
     Parameters
     ----------
@@ -43,52 +67,97 @@ def anchor_joints_at_the_ears(skeleton, generic, landmarks, V, F, names=("head",
         The head's landmarks shared with the generic rig, head frame.
     V, F : (n, 3) float, (m, 3) int
         The head.
+    source : dict str -> (3,) float, optional
+        The same names' points on the generic skin (its frame; the detector's own on the generic
+        when the head's were detected, so their biases cancel); default ``generic.landmarks``.
+    face_mask : bool
+        The head is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
+    by_face : bool
+        Whether a face's similarity may place the joints. Not for automatic landmarks: with the
+        detector's on both skins the warp has nothing to unlearn, and it put the head joint of ICT's
+        identities and James 0.03-0.07 ex-ex from the occiput-C1 centre, the similarity 0.10-0.22
+        (the SMPL heads and Lee Perry-Smith: warp 0.14-0.17, similarity 0.10-0.14).
     names : tuple of str
         Joints to place.
 
     Returns
     -------
-    (Skeleton, list of str, list of str)
-        The skeleton (a parent bone whose tail was at a moved joint follows it), the joints placed
-        from the ears, and the joints put on the midplane.
+    (Skeleton, dict)
+        The skeleton (a parent bone whose tail was at a moved joint follows it) and the joints placed
+        ``from_ears``, ``from_face`` and put ``on_midplane`` (lists of names).
     """
     from ..landmarks.refine import symmetry_plane
     from ..skeleton import Skeleton
 
-    from_ears = _from_the_ears(generic, landmarks)
+    G = generic.landmarks if source is None else source
+    from_ears = _from_the_ears(G, landmarks)
+    from_face = None if from_ears is not None or not by_face else _from_the_face(G, landmarks)
+    mapped = from_ears or from_face
     pairs = sum(1 for n in landmarks if n.endswith("_l") and mirror_name(n) in landmarks)
     plane = symmetry_plane(landmarks) if pairs >= MIN_PAIRS else None
-    if from_ears is None and plane is None:
-        return skeleton, [], []
+    placed = {"from_ears": [], "from_face": [], "on_midplane": []}
+    if mapped is None and plane is None:
+        return skeleton, placed
     heads, tails = np.array(skeleton.heads, dtype=np.float64), np.array(skeleton.tails, dtype=np.float64)
     bones, gbones = list(skeleton.names), list(generic.skeleton.names)
     size = float(np.ptp(V, axis=0).max())
-    anchored, centred = [], []
     for name in (n for n in names if n in bones and n in gbones):
         i = bones.index(name)
-        want = heads[i] if from_ears is None else from_ears(generic.skeleton.heads[gbones.index(name)])
+        want = heads[i] if mapped is None else mapped(generic.skeleton.heads[gbones.index(name)])
         if plane is not None:
             normal, offset = plane
             want = want - (float(want @ normal) - offset) * normal
-        p = _inside_toward(V, F, want, heads[i])
+        p = want if face_mask and from_face is not None else _inside_toward(V, F, want, heads[i])
         if p is None:
             continue
         # the bone ending at this joint (the neck's tail at the head joint) keeps meeting it
         tails[np.linalg.norm(tails - heads[i], axis=1) <= 1e-9 * size] = p
         heads[i] = p
-        if from_ears is not None:
-            anchored.append(name)
+        if mapped is not None:
+            placed["from_ears" if from_ears is not None else "from_face"].append(name)
         if plane is not None:
-            centred.append(name)
-    return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), anchored, centred
+            placed["on_midplane"].append(name)
+    return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), placed
 
 
-def _from_the_ears(generic, landmarks):
-    """A map from a generic joint (3,) to where it goes on the head by its ear canals, or None
-    without both tragions and both exocanthions on both."""
+def _from_the_face(G, landmarks):
+    """A map from a generic joint (3,) to where it goes on a human face by the landmarks' similarity
+    (Umeyama 1991) from the generic's ``G``, or None: landmarks behind the face, fewer than
+    ``MIN_FACE`` shared, or a face no similarity of the generic's fits (an animal's, a cartoon's).
+
+    The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
+    animals' so); the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
+    are ``MIN_FACE`` of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them,
+    0.08 without, and a neutral face's joints 0.00-0.02 either way."""
     from ..geometry.rotations import similarity
 
-    G = generic.landmarks
+    shared = [n for n in landmarks if n in G]
+    if any(n in landmarks for n in BACK_LANDMARKS) or len(shared) < MIN_FACE \
+            or not all(n in G for n in ("exocanthion_l", "exocanthion_r")):
+        return None
+
+    def fit(names):
+        P = np.array([G[n] for n in names], dtype=np.float64)
+        Q = np.array([landmarks[n] for n in names], dtype=np.float64)
+        s, R = similarity(P, Q)
+        p0, q0 = P.mean(axis=0), Q.mean(axis=0)
+        return s, R, p0, q0, np.sqrt((((Q - q0) - s * (P - p0) @ R.T) ** 2).sum(axis=1).mean())
+
+    s, R, p0, q0, residual = fit(shared)
+    exex = s * float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
+    if not residual <= HUMAN_FIT * exex:
+        return None
+    upper = [n for n in shared if n not in JAW_CARRIED]
+    if len(upper) >= MIN_FACE:
+        s, R, p0, q0, _ = fit(upper)
+    return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
+
+
+def _from_the_ears(G, landmarks):
+    """A map from a generic joint (3,) to where it goes on the head by its ear canals, or None
+    without both tragions and both exocanthions on both (``G`` the generic's landmarks)."""
+    from ..geometry.rotations import similarity
+
     if not all(n in landmarks and n in G for n in EAR_LANDMARKS):
         return None
     shared = [n for n in landmarks if n in G]

@@ -12,7 +12,8 @@ Different Face Models", §3.7 for the whole method); one module a stage:
    that correspondence, carries the skeleton and the muscle origins (their §3.4);
    muscle insertions ride the correspondence itself; on a head with tragions the
    ``head`` and ``jaw`` joints then sit where the generic's do relative to its ear
-   canals (:func:`anchor_joints_at_the_ears`; Chancey et al. 2007);
+   canals or, on a human face whose landmarks stop at the face, from its landmarks
+   (:func:`~.joints.anchor_joints`; Chancey et al. 2007);
 4. attributes (fields, eyes, jaw, neck): skin weights, region labels and every other field land on
    the head's own vertices, with unreliable matches inpainted; eyeballs follow the eye bones; the
    jaw weight is repaired from the landmarks and the neck base made still (the head/neck blend
@@ -32,7 +33,7 @@ import os
 import numpy as np
 
 from .correspondence import dense_correspondence
-from .joints import anchor_joints_at_the_ears
+from .joints import anchor_joints
 from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
@@ -46,6 +47,7 @@ from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
 from ..io.mesh import resolve_mesh, stray_parts
 from ..orient import detect_frame, frame_from_landmarks
+from ..geometry.head_share import face_only
 from ..geometry.weights import prune_weights
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -260,7 +262,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
 
-    under, skeleton, from_ears, on_midplane = _under_skin(generic, P, ok, control_points, symmetry, dst, V, F)
+    under, skeleton, placed = _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
+                                          by_face=detected is None)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -274,8 +277,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "detected" if detected is not None else "given",
                "rig": rig_option,
                "jaw_prior_degrees": round(float(fit_details.get("jaw_deg", 0.0)), 3),
-               "joints_from_ears": from_ears,
-               "joints_on_midplane": on_midplane,
+               "joints_from_ears": placed["from_ears"],
+               "joints_from_face": placed["from_face"],
+               "joints_on_midplane": placed["on_midplane"],
                "symmetric": symmetry.record_,
                "expression_fit": _expression_record(found_details, fit_details, expression_fit, space,
                                                     detected is not None),
@@ -298,19 +302,22 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _under_skin(generic, P, ok, control_points, symmetry, dst, V, F):
-    """(under, skeleton, from_ears, on_midplane): the under-skin warp fitted on the correspondence
-    ``P`` (n_rig, 3) where ``ok``, and the generic skeleton carried by it, its head and jaw then placed
-    by the head's ears and midplane (:func:`anchor_joints_at_the_ears`; ``dst`` the head's shared
-    landmarks)."""
+def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True):
+    """(under, skeleton, placed): the under-skin warp fitted on the correspondence ``P`` (n_rig, 3)
+    where ``ok``, and the generic skeleton carried by it, its head and jaw then placed by the head's
+    ears or face and its midplane (:func:`~.joints.anchor_joints`: ``placed`` says which; ``src`` and
+    ``dst`` the shared landmarks on the generic and on the head; ``frame`` the head's, which tells a face
+    mask; ``by_face`` False for automatic landmarks)."""
     partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
     # the dense warp follows the skull and neck, so the joints drift 0.08-0.16 ex-ex off the ear
-    # canals' anatomy on the zoo's humans; where the head has tragions they say where it is, and its
+    # canals' anatomy on the zoo's humans, and extrapolates the back of the head from a face's landmarks;
+    # where the head has tragions they say where the joints are, else a human face's landmarks, and its
     # landmark pairs where its midplane is
-    skeleton, from_ears, on_midplane = anchor_joints_at_the_ears(skeleton, generic, dst, V, F)
-    return under, skeleton, from_ears, on_midplane
+    mask = face_only(frame.to_canonical(V), F)
+    skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, face_mask=mask, by_face=by_face)
+    return under, skeleton, placed
 
 
 def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap):
