@@ -82,6 +82,9 @@ def cmd_transfer(args):
         print(f"landmarks: {len(conf)} found automatically, mean confidence {sum(conf.values()) / max(len(conf), 1):.2f}"
               + (f"; dropped {', '.join(dropped)}" if dropped else "")
               + f" (check them: autobones landmarks {args.head} --preview PNG)")
+    if rig.options.get("joints_from_face"):   # a human's proportions, not this head's: the user can do better
+        print("joints: head and jaw placed from the face's landmarks by a human's proportions (the file has no "
+              "ears); add tragion_l and tragion_r to place them from the ear canals (sidecar options.joints_from_face)")
     worn = (rig.options.get("expression_fit") or {}).get("weights") or {}
     if worn:   # a scan's expression is news to the user: the rig's rest pose wears it
         print("expression: the head seems to wear " + ", ".join(f"{k} {v:.2f}" for k, v in list(worn.items())[:4])

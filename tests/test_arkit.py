@@ -137,6 +137,8 @@ def test_a_one_surface_scan_takes_the_shapes_without_folds(james):
     path, out = james
     assert out.returncode == 0, out.stderr
     assert "52 ARKit shapes" in out.stdout
+    # its landmark file stops at the face: the command says where the head and jaw joints came from
+    assert "joints: head and jaw placed from the face's landmarks" in out.stdout
     rig = autobones.load_rig(path)
     rec = rig.arkit
     assert rec["eyes"].startswith("no separate eyeballs")
