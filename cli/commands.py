@@ -30,11 +30,13 @@ def cmd_place(args):
     print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
           f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
           f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
-    head_cues = ((rig.other or {}).get("joints") or {}).get("head", {}).get("cues", [])
-    if "face_only" in head_cues:   # a mask's pivot is a guess from a face's proportions: the user should know
-        print("joints: a face mask (open at the back, no neck): the head pivot is placed behind the nose by a face's "
-              "proportions and the neck has nothing to bend; rig the whole head for its own pivot "
-              "(sidecar joints.head.cues)")
+    head = ((rig.other or {}).get("joints") or {}).get("head", {})
+    if "face_only" in head.get("cues", []):   # a mask's pivot is a guess from a face's proportions: say so
+        how = ("from the face's automatic landmarks by a human's proportions" if "face_landmarks" in head["cues"]
+               else "behind the nose by a face's proportions"
+               + (f" (automatic landmarks: {head['face_landmarks']})" if head.get("face_landmarks") else ""))
+        print(f"joints: a face mask (open at the back, no neck): the head pivot is placed {how} and the neck has "
+              "nothing to bend; rig the whole head for its own pivot (sidecar joints.head)")
     return 0
 
 

@@ -131,28 +131,50 @@ def test_sidecar_names_the_cues_and_keeps_them(rigs, tmp_path):
     assert back.sidecar()["joints"] == joints
 
 
-def test_face_mask_pivot_from_the_nose():
-    """A face mask (ICT identity000 cut 0.3 ex-ex behind its ear canals) and James' scan: the pivot
-    behind the nose by the mask's width (``nose`` cues), near Chancey's occiput-C1 centre from the
-    tragions (22.5 mm behind, 22.6 mm below them, x ex-ex / 90 mm). Measured 0.118 and 0.191 ex-ex;
-    by the mask's proportions they were 1.85 and 0.389."""
+def _mask_and_anatomy(rel, behind_ears):
+    """The head ``rel`` (tests/data) cut by a plane ``behind_ears`` ex-ex behind its tragions' midpoint
+    (negative: in front; None: as it is), and Chancey's occiput-C1 centre from its hand-placed tragions
+    (22.5 mm behind, 22.6 mm below them, x ex-ex / 90 mm) and its ex-ex."""
     from autobones.io.landmarks import read_landmarks
     from autobones.orient import frame_from_landmarks
 
     here = Path(__file__).parent / "landmarks"
+    V, F = load_mesh(data(rel + ".obj"))[:2]
+    lm = {k: np.asarray(v, float) for k, v in read_landmarks(data(rel + ".landmarks.json")).items()}
+    lm.update({k: np.asarray(v, float) for k, v in read_landmarks(here / f"{rel.split('/')[1]}.tragions.json").items()})
+    frame = frame_from_landmarks(V, F, lm)
+    up, front = frame.rotation[1], frame.rotation[2]
+    ex = float(np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]))
+    ears = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
+    if behind_ears is not None:
+        F = F[((V - ears) @ front > -behind_ears * ex)[F].all(axis=1)]
+    return (V, F), ears + ex / 90.0 * (-22.5 * front - 22.6 * up), ex
+
+
+def test_face_mask_pivot_from_the_nose(monkeypatch):
+    """A face mask (ICT identity000 cut 0.3 ex-ex behind its ear canals) and James' scan, where no face
+    is found: the pivot behind the nose by the mask's width (``nose`` cues), near Chancey's occiput-C1
+    centre. Measured 0.118 and 0.191 ex-ex; by the mask's proportions they were 1.85 and 0.389."""
+    import autobones.rig_transfer.face_joints as face_joints
+
+    monkeypatch.setattr(face_joints, "face_joints", lambda V, F, frame=None: (None, "none in this test"))
     for rel, cut in (("ict/identity000", 0.3), ("menpo3d/james", None)):
-        V, F = load_mesh(data(rel + ".obj"))[:2]
-        lm = {k: np.asarray(v, float) for k, v in read_landmarks(data(rel + ".landmarks.json")).items()}
-        lm.update({k: np.asarray(v, float) for k, v in read_landmarks(here / f"{rel.split('/')[1]}.tragions.json").items()})
-        frame = frame_from_landmarks(V, F, lm)
-        up, front = frame.rotation[1], frame.rotation[2]
-        ex = float(np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"]))
-        ears = 0.5 * (lm["tragion_l"] + lm["tragion_r"])
-        if cut is not None:
-            F = F[((V - ears) @ front > -cut * ex)[F].all(axis=1)]
-        rig = autobones.place((V, F))
-        cues = rig.sidecar()["joints"]["head"]["cues"]
-        assert "face_only" in cues and "nose" in cues, (rel, cues)
-        c1 = ears + ex / 90.0 * (-22.5 * front - 22.6 * up)
-        head = rig.skeleton.heads[list(rig.skeleton.names).index("head")]
-        assert np.linalg.norm(head - c1) < (0.15 if cut is not None else 0.25) * ex, rel
+        mesh, c1, ex = _mask_and_anatomy(rel, cut)
+        rig = autobones.place(mesh)
+        head = rig.sidecar()["joints"]["head"]
+        assert "face_only" in head["cues"] and "nose" in head["cues"], (rel, head)
+        assert head["face_landmarks"] == "none in this test"
+        joint = rig.skeleton.heads[list(rig.skeleton.names).index("head")]
+        assert np.linalg.norm(joint - c1) < (0.15 if cut is not None else 0.25) * ex, rel
+
+
+def test_face_mask_pivot_from_the_faces_landmarks():
+    """ICT identity000 cut into a mask 0.5 ex-ex in front of its ear canals: narrower and pitched, its
+    nose rule put the pivot 0.40 ex-ex from Chancey's centre; the generic rig's pivot placed by the
+    face's automatic landmarks (``face_landmarks``) 0.15."""
+    mesh, c1, ex = _mask_and_anatomy("ict/identity000", -0.5)
+    rig = autobones.place(mesh)
+    head = rig.sidecar()["joints"]["head"]
+    assert "face_only" in head["cues"] and "face_landmarks" in head["cues"], head
+    joint = rig.skeleton.heads[list(rig.skeleton.names).index("head")]
+    assert np.linalg.norm(joint - c1) < 0.2 * ex

@@ -27,7 +27,9 @@ The head joint (``head`` cues):
   head, and at most ``PIVOT_BACK_WIDTH`` of the section's width (a snout or a jaw far in front of
   the neck lengthens the section, not the skull's base);
 - ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
-  and no neck to measure: the pivot is placed far behind it, from the nose (``nose``: the midline
+  and no neck to measure: on a human face the pivot is the generic rig's, placed by the face's
+  automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.09-0.21 ex-ex
+  from Chancey's centre on the shared heads cut into masks where a face is found); else far behind it, from the nose (``nose``: the midline
   profile's most anterior point, and the mask's width there as the scale, ``nose_width``: on James and
   the menpo template 0.191 / 0.173 ex-ex from Chancey's centre, most of it the mask's pitch in its
   frame times the 1.5 ex-ex lever; the mask's proportions put them 0.389 / 0.297 off), or by its
@@ -139,7 +141,7 @@ def height_profile(S, bottom, top, slab=SLAB, midline=MIDLINE):
     return out
 
 
-def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
+def find_joints(S, bottom, top, chin=None, face_mask=False, base=None, pivot=None):
     """The head pivot and the neck base of a head from its surface sample (module docstring).
 
     Parameters
@@ -154,6 +156,9 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         The mesh is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
     base : float, optional
         The neck base's top (:func:`autobones.geometry.head_share.neck_base_height`); default ``NECK_BASE`` of the height.
+    pivot : (float, float), optional
+        A face mask's pivot (height, depth) from its landmarks (:mod:`autobones.rig_transfer.face_joints`),
+        taken instead of the nose rule.
 
     Returns
     -------
@@ -169,7 +174,8 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None):
         head_cues.append("midline_top")
     length = head_length(prof, top)
     if face_mask:
-        y_head, z_head, mask_cues = _mask_pivot(prof, top, bottom, chin)
+        y_head, z_head, mask_cues = (*pivot, ["face_landmarks"]) if pivot is not None else \
+            _mask_pivot(prof, top, bottom, chin)
         head_cues += ["face_only"] + mask_cues
     else:
         # the head's height scale is its length, front to back, or the length its height down to

@@ -17,6 +17,7 @@ import numpy as np
 from .facial_bones import bone_count, check_seed, facial_bones
 from ..io.mesh import resolve_mesh, stray_parts
 from ..geometry.proxy import mesh_proxy
+from ..geometry.head_share import face_only
 from ..orient import detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -92,7 +93,9 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     coarse = proxy.coarse_surface
     lap("proxy")
     log.info("frame: up %s, front %s, head size %.4g", frame.up, frame.front, frame.size)
-    seg = segment_head(C, F, volume=coarse)
+    pivot, note = _face_mask_pivot(V, F, C, frame)
+    lap("face_landmarks")
+    seg = segment_head(C, F, volume=coarse, pivot=pivot)
     lap("segment")
     heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
     lap("facial")
@@ -101,10 +104,29 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}
+    joints = seg.joints.to_dict()
+    if note:
+        joints["head"]["face_landmarks"] = note   # why a face mask's pivot is the nose rule's
     return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
                timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
-               neck_height_canonical=seg.neck_height, other={"joints": seg.joints.to_dict()})
+               neck_height_canonical=seg.neck_height, other={"joints": joints})
+
+
+def _face_mask_pivot(V, F, C, frame):
+    """((height, depth), None): a face mask's head pivot (canonical, head sizes) from its automatic
+    landmarks (:func:`autobones.rig_transfer.face_joints.face_joints`); (None, why not) when none is
+    found; (None, None) for a mesh that is no face mask (``V`` input frame, ``C`` canonical)."""
+    if not face_only(C, F):
+        return None, None
+    from ..rig_transfer.face_joints import face_joints
+
+    joints, note = face_joints(V, F, frame)
+    if joints is None:
+        log.info("face mask: its pivot from its nose (automatic landmarks: %s)", note)
+        return None, note
+    p = frame.to_canonical(joints["head"][None])[0]
+    return (float(p[1]), float(p[2])), None
 
 
 def _depth_skeleton(seg, heads, tails, n_bones):

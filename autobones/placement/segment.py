@@ -85,7 +85,7 @@ class HeadSegmentation:
         return _ordered_cut(self.linkage, self.sample_depth, n_groups)
 
 
-def segment_head(V, F, sample_count=4000, seed=0, volume=None):
+def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     """Depth groups and head/neck bones of a head in the canonical frame.
 
     Parameters
@@ -99,6 +99,8 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
     volume : (Vc, Fc), optional
         A coarser copy of the same surface (canonical frame) for the inside tests that keep the
         bones in the volume: winding numbers cost a tree over every triangle.
+    pivot : (float, float), optional
+        A face mask's head pivot (height, depth; canonical) from its landmarks (:func:`.joints.find_joints`).
 
     Returns
     -------
@@ -143,7 +145,7 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
         if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
             cut, chin = h, (h if is_chin else None)
             break
-    joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask)
+    joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask, pivot)
     neck = V[:, 1] < cut
     return HeadSegmentation(
         labels=labels, neck=neck, facial_mask=(labels == FACE) & ~neck,
@@ -151,18 +153,18 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None):
         head_bone=head_bone, neck_bone=neck_bone, chin_height=chin, joints=joints)
 
 
-def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask):
+def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask, pivot=None):
     """The head pivot and the neck base (:func:`.joints.find_joints`) as bones kept inside the volume.
 
     The head bone runs vertically from the pivot to 0.8 of the way to the top of the head, the neck
     bone from the neck base to the pivot. ``Vm``: the used vertices; ``head_mean`` and ``neck_mean``
     (the depth groups' upper and lower middle means) anchor the pull back inside; ``mask``: the mesh
-    is a face mask (:func:`autobones.geometry.head_share.face_only`)."""
+    is a face mask (:func:`autobones.geometry.head_share.face_only`); ``pivot`` its pivot from its landmarks."""
     # a larger sample than the clustering's: the profile's 2% slabs and 12% midline strip need some
     # tens of points each, and sampling is linear in the mesh
     P, _, _ = sample_surface(V, F, JOINT_SAMPLES, seed=seed)
     found = find_joints(P, float(Vm[:, 1].min()), float(Vm[:, 1].max()), chin=chin, face_mask=mask,
-                        base=neck_base_height(Vm[:, 1]))
+                        base=neck_base_height(Vm[:, 1]), pivot=pivot if mask else None)
     joint, neck_root = found.head.copy(), found.neck.copy()
     top = Vm[:, 1].max()
     head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), joint[2]])

@@ -91,7 +91,7 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
 
     G = generic.landmarks if source is None else source
     from_ears = _from_the_ears(G, landmarks)
-    from_face = None if from_ears is not None or not by_face else _from_the_face(G, landmarks)
+    from_face = None if from_ears is not None or not by_face else face_similarity(G, landmarks)
     mapped = from_ears or from_face
     pairs = sum(1 for n in landmarks if n.endswith("_l") and mirror_name(n) in landmarks)
     plane = symmetry_plane(landmarks) if pairs >= MIN_PAIRS else None
@@ -120,10 +120,11 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
     return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), placed
 
 
-def _from_the_face(G, landmarks):
-    """A map from a generic joint (3,) to where it goes on a human face by the landmarks' similarity
-    (Umeyama 1991) from the generic's ``G``, or None: landmarks behind the face, fewer than
-    ``MIN_FACE`` shared, or a face no similarity of the generic's fits (an animal's, a cartoon's).
+def face_similarity(G, landmarks):
+    """A map from a generic joint (3,) (the generic's frame) to where it goes on a human face by the
+    landmarks' similarity (Umeyama 1991) from the generic's ``G`` (dict str -> (3,)) to ``landmarks``
+    (dict str -> (3,), the head's frame), or None: landmarks behind the face, fewer than ``MIN_FACE``
+    shared, or a face no similarity of the generic's fits (an animal's, a cartoon's).
 
     The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
     animals' so); the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
