@@ -40,9 +40,13 @@ def face_joints(V, F, frame=None, names=("head",)):
     note : str or None
         Why not (no detector installed, no face found, a face no human's fits), else None.
     """
+    import importlib.util
+
     from ..landmarks.detect import LandmarkDetector
     from ..landmarks.refine import symmetry_plane
 
+    if importlib.util.find_spec("mediapipe") is None:   # before rendering the views it would read
+        return None, "no face detector installed (pip install 'autobones[landmarks]')"
     try:
         found = dict(LandmarkDetector().detect(V, F, frame=frame, what="the face"))
     except AutobonesError as exc:
