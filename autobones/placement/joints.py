@@ -28,12 +28,12 @@ The head joint (``head`` cues):
   the neck lengthens the section, not the skull's base);
 - ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
   and no neck to measure: on a human face the pivot is the generic rig's, placed by the face's
-  automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.09-0.21 ex-ex
-  from Chancey's centre on the shared heads cut into masks where a face is found); else far behind it, from the nose (``nose``: the midline
-  profile's most anterior point, and the mask's width there as the scale, ``nose_width``: on James and
-  the menpo template 0.191 / 0.173 ex-ex from Chancey's centre, most of it the mask's pitch in its
-  frame times the 1.5 ex-ex lever; the mask's proportions put them 0.389 / 0.297 off), or by its
-  proportions without a midline profile (``proportions``).
+  automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.08-0.21 ex-ex
+  from Chancey's centre on the shared heads cut into masks where a face is found); else far behind
+  it, from the nose (``nose``: the midline profile's most anterior point, and the mask's width there
+  as the scale, ``nose_width``: on James and the menpo template 0.191 / 0.173 ex-ex from Chancey's
+  centre, most of it the mask's pitch in its frame times the 1.5 ex-ex lever; the mask's proportions
+  put them 0.389 / 0.297 off), or by its proportions without a midline profile (``proportions``).
 
 The neck joint (``neck`` cues): ``neck_section``, the neck's narrowest horizontal section under the
 pivot (bounding width of an area-uniform sample, slab by slab), then ``shoulders``, where the
