@@ -18,7 +18,7 @@ from .facial_bones import bone_count, check_seed, facial_bones
 from ..io.mesh import resolve_mesh, stray_parts
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
-from ..orient import detect_frame
+from ..orient import Frame, detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
 from .segment import segment_head
@@ -93,7 +93,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     coarse = proxy.coarse_surface
     lap("proxy")
     log.info("frame: up %s, front %s, head size %.4g", frame.up, frame.front, frame.size)
-    pivot, note = _face_mask_pivot(V, F, C, frame)
+    pivot, note = _face_mask_pivot(C, F)
     lap("face_landmarks")
     seg = segment_head(C, F, volume=coarse, pivot=pivot)
     lap("segment")
@@ -113,20 +113,21 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
                neck_height_canonical=seg.neck_height, other={"joints": joints})
 
 
-def _face_mask_pivot(V, F, C, frame):
+def _face_mask_pivot(C, F):
     """((height, depth), None): a face mask's head pivot (canonical, head sizes) from its automatic
     landmarks (:func:`autobones.rig_transfer.face_joints.face_joints`); (None, why not) when none is
-    found; (None, None) for a mesh that is no face mask (``V`` input frame, ``C`` canonical)."""
+    found; (None, None) for a mesh that is no face mask. Found on the canonical mesh ``C`` (n, 3), in
+    the canonical frame: a turned or rescaled copy of a head then gives the detector the same pictures
+    (on the input's own vertices the menpo template's pivot moved 0.04 head sizes between copies)."""
     if not face_only(C, F):
         return None, None
     from ..rig_transfer.face_joints import face_joints
 
-    joints, note = face_joints(V, F, frame)
+    joints, note = face_joints(C, F, Frame(np.eye(3), np.zeros(3), 1.0))
     if joints is None:
         log.info("face mask: its pivot from its nose (automatic landmarks: %s)", note)
         return None, note
-    p = frame.to_canonical(joints["head"][None])[0]
-    return (float(p[1]), float(p[2])), None
+    return (float(joints["head"][1]), float(joints["head"][2])), None
 
 
 def _depth_skeleton(seg, heads, tails, n_bones):
