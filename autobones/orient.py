@@ -46,7 +46,7 @@ from scipy.spatial import cKDTree
 from .cut_cues import cut_cues as _cut_cues, cut_up_front, is_planar_cut
 from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
-from .geometry.mirror_plane import best_plane, mirror_error, reflect, refine_plane, shape_starts
+from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
 from .geometry.topology import used_vertices
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
@@ -250,7 +250,7 @@ def _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err):
     up_d = up_d - (up_d @ left) * left
     up_d /= np.linalg.norm(up_d)
     R = np.vstack([left, up_d, np.cross(left, up_d)])
-    origin = center - ((center @ normal) - offset) * normal  # on the symmetry plane
+    origin = onto_plane(center, normal, offset)
     used = used_vertices(F, len(V))
     local = (V[used] - origin) @ R.T
     size = float((local.max(axis=0) - local.min(axis=0)).max())

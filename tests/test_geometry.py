@@ -213,3 +213,19 @@ def test_mirror_plane_is_found_from_the_sample_itself_in_any_frame():
                    key=lambda nd: mirror_error(X, tree, *nd))
         assert abs(best[0] @ true_n) > 1 - 1e-9
         assert mirror_error(X, tree, *best) < 1e-9
+
+
+def test_onto_plane_moves_points_along_the_normal_onto_the_plane():
+    """geometry.mirror_plane.onto_plane: each point lands on the plane, moved along its normal by its
+    signed distance (a point on the plane stays), and halfway to its mirror image."""
+    from autobones.geometry.mirror_plane import onto_plane, reflect
+
+    rng = np.random.default_rng(5)
+    n = rng.normal(size=3)
+    n /= np.linalg.norm(n)
+    P = rng.normal(size=(50, 3)) * 3.0
+    Q = onto_plane(P, n, 0.7)
+    np.testing.assert_allclose(Q @ n, 0.7, atol=1e-12)
+    np.testing.assert_allclose(np.cross(P - Q, n), 0.0, atol=1e-12)
+    np.testing.assert_allclose(Q, 0.5 * (P + reflect(P, n, 0.7)), atol=1e-12)
+    np.testing.assert_array_equal(onto_plane(Q[0], n, 0.7).shape, (3,))

@@ -18,6 +18,13 @@ def reflect(P, normal, offset):
     return P - 2.0 * (P @ normal - offset)[..., None] * normal
 
 
+def onto_plane(P, normal, offset):
+    """Points ``P`` (..., 3) moved along the unit ``normal`` onto the plane ``normal . x = offset`` (the
+    feet of their perpendiculars); same frame and units."""
+    P = np.asarray(P, dtype=np.float64)
+    return P - (P @ normal - offset)[..., None] * normal
+
+
 def refine_plane(P, tree, n, d, scale, iterations=12):
     """Reflective ICP of the plane ``n . x = d`` on points ``P``; ``scale`` (their RMS radius, mesh
     units) makes the convergence test unit-free. The plane returned is the visited one with the

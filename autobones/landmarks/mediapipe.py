@@ -69,10 +69,19 @@ class MediaPipeFaceMesh:
     """
 
     points = MEDIAPIPE_POINTS
+    #: what a user without the detector is told to run
+    INSTALL = "pip install 'autobones[landmarks]'"
 
     def __init__(self, min_confidence=0.5):
         self.min_confidence = min_confidence
         self._model = None
+
+    @staticmethod
+    def installed():
+        """Whether MediaPipe can be imported (without importing it: it loads TensorFlow Lite)."""
+        import importlib.util
+
+        return importlib.util.find_spec("mediapipe") is not None
 
     def _load(self):
         os.environ.setdefault("GLOG_minloglevel", "2")
@@ -83,7 +92,7 @@ class MediaPipeFaceMesh:
                 from mediapipe.python.solutions import face_mesh
         except ImportError as exc:
             raise AutobonesError(
-                "automatic landmarks need the optional face detector: pip install 'autobones[landmarks]' "
+                f"automatic landmarks need the optional face detector: {MediaPipeFaceMesh.INSTALL} "
                 f"(MediaPipe; import failed: {exc})") from None
         with quiet_stderr():  # also when used on its own
             self._model = face_mesh.FaceMesh(static_image_mode=True, max_num_faces=1,

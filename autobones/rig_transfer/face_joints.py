@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import AutobonesError
+from ..geometry.mirror_plane import onto_plane
 from .joints import face_similarity
 from .pipeline import generic_detected_landmarks, load_generic
 
@@ -40,13 +41,12 @@ def face_joints(V, F, frame=None, names=("head",)):
     note : str or None
         Why not (no detector installed, no face found, a face no human's fits), else None.
     """
-    import importlib.util
-
     from ..landmarks.detect import LandmarkDetector
+    from ..landmarks.mediapipe import MediaPipeFaceMesh
     from ..landmarks.refine import symmetry_plane
 
-    if importlib.util.find_spec("mediapipe") is None:   # before rendering the views it would read
-        return None, "no face detector installed (pip install 'autobones[landmarks]')"
+    if not MediaPipeFaceMesh.installed():   # asked before rendering the views it would read
+        return None, f"no face detector installed ({MediaPipeFaceMesh.INSTALL})"
     try:
         found = dict(LandmarkDetector().detect(V, F, frame=frame, what="the face"))
     except AutobonesError as exc:
@@ -56,13 +56,9 @@ def face_joints(V, F, frame=None, names=("head",)):
     if source is None:
         return None, "the generic rig's own landmarks were not found"
     shared = {n: np.asarray(p, dtype=np.float64) for n, p in found.items() if n in source}
-    mapped = face_similarity({n: source[n] for n in shared}, shared)
+    mapped = face_similarity(source, shared)
     if mapped is None:
         return None, "the landmarks found fit no human face"
-    normal, offset = symmetry_plane(shared)
+    plane = symmetry_plane(shared)
     bones = list(generic.skeleton.names)
-    out = {}
-    for name in names:
-        p = mapped(generic.skeleton.heads[bones.index(name)])
-        out[name] = p - (float(p @ normal) - offset) * normal
-    return out, None
+    return {name: onto_plane(mapped(generic.skeleton.heads[bones.index(name)]), *plane) for name in names}, None

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry.head_share import face_only
+from ..geometry.mirror_plane import onto_plane
 from ..io.landmark_names import mirror_name
 
 EAR_LANDMARKS = ("tragion_l", "tragion_r", "exocanthion_l", "exocanthion_r")
@@ -33,7 +35,7 @@ JAW_CARRIED = ("menton", "pogonion", "labiale_inferius", "sublabiale")   # move 
 HUMAN_FIT = 0.12
 
 
-def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=False, by_face=True,
+def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, by_face=True,
                   names=("head", "jaw")):
     """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
     ear canals, or else to its human face, and onto the landmarks' midplane.
@@ -70,8 +72,9 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
     source : dict str -> (3,) float, optional
         The same names' points on the generic skin (its frame; the detector's own on the generic
         when the head's were detected, so their biases cancel); default ``generic.landmarks``.
-    face_mask : bool
-        The head is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
+    frame : autobones.orient.Frame, optional
+        The head's frame: it tells a face-only capture (:func:`autobones.geometry.head_share.face_only`)
+        when the face places the joints; None: the head is taken for a closed one.
     by_face : bool
         Whether a face's similarity may place the joints. Not for automatic landmarks: with the
         detector's on both skins the warp has nothing to unlearn, and it put the head joint of ICT's
@@ -98,6 +101,8 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
     placed = {"from_ears": [], "from_face": [], "on_midplane": []}
     if mapped is None and plane is None:
         return skeleton, placed
+    # a face mask has no inside to keep the face's joints in (asked only when the face places them)
+    face_mask = from_face is not None and frame is not None and face_only(frame.to_canonical(V), F)
     heads, tails = np.array(skeleton.heads, dtype=np.float64), np.array(skeleton.tails, dtype=np.float64)
     bones, gbones = list(skeleton.names), list(generic.skeleton.names)
     size = float(np.ptp(V, axis=0).max())
@@ -105,9 +110,8 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, face_mask=Fal
         i = bones.index(name)
         want = heads[i] if mapped is None else mapped(generic.skeleton.heads[gbones.index(name)])
         if plane is not None:
-            normal, offset = plane
-            want = want - (float(want @ normal) - offset) * normal
-        p = want if face_mask and from_face is not None else _inside_toward(V, F, want, heads[i])
+            want = onto_plane(want, *plane)
+        p = want if face_mask else _inside_toward(V, F, want, heads[i])
         if p is None:
             continue
         # the bone ending at this joint (the neck's tail at the head joint) keeps meeting it

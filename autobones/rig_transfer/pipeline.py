@@ -47,7 +47,6 @@ from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
 from ..io.mesh import resolve_mesh, stray_parts
 from ..orient import detect_frame, frame_from_landmarks
-from ..geometry.head_share import face_only
 from ..geometry.weights import prune_weights
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -315,8 +314,7 @@ def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
     # canals' anatomy on the zoo's humans, and extrapolates the back of the head from a face's landmarks;
     # where the head has tragions they say where the joints are, else a human face's landmarks, and its
     # landmark pairs where its midplane is
-    mask = face_only(frame.to_canonical(V), F)
-    skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, face_mask=mask, by_face=by_face)
+    skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, frame=frame, by_face=by_face)
     return under, skeleton, placed
 
 
