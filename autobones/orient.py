@@ -14,7 +14,8 @@ Method
 2. Up and front: 12 ups round the symmetry plane, from the main cut's far side or the sample's own
    longest in-plane axis (:mod:`autobones.frame_candidates`), each with both fronts. When one
    direction clearly has a cut at its far end (a flat base or an open rim: neck cut, bust base; on a
-   closed mesh, flat caps all at one level, :func:`autobones.cut_cues.cap_score`), it and its
+   closed mesh, flat caps all at one level, :func:`autobones.cut_cues.cap_score`; holes that do not
+   cross the symmetry plane, or are short, are no cut: :func:`autobones.cut_cues.midline_cuts`), it and its
    neighbours are down -- unless the mesh is a face-only capture: an open shell faces away
    from its opening, which is then its back, and only the fronts along that way stay. The remaining
    choices are scored by how well the head's top slice overlays the same slice of a reference head
@@ -43,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .cut_cues import cut_cues as _cut_cues, cut_up_front, is_planar_cut
+from .cut_cues import cut_cues as _cut_cues, cut_up_front, is_planar_cut, midline_cuts
 from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
@@ -189,6 +190,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         sym_err, normal, offset, cues = _symmetry_plane(V, F, P, tree, rms, up_v, front_v)
     if cues is None:
         cues = _cut_cues(V, F)  # only the frame's cut needs them when up is forced
+    cues = midline_cuts(cues, normal, offset)  # holes in mirrored pairs are no cut
     if up_v is None or front_v is None:
         # free (nothing forced): no step reads the file's axes, so a turned or scaled copy of a head
         # gets this frame turned or scaled (to round-off); a forced axis is the user's, kept as given

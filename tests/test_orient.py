@@ -272,3 +272,51 @@ def test_the_frame_turns_and_scales_with_the_head(rel):
         assert np.abs(back - ref.rotation).max() < 1e-6
         np.testing.assert_allclose(turn.T @ frame.origin / scale, ref.origin, atol=1e-6 * ref.size)
         assert abs(frame.size / scale - ref.size) < 1e-6 * ref.size
+
+
+def test_holes_in_mirrored_pairs_and_short_holes_are_no_cut():
+    """cut_cues.midline_cuts: of a sphere's open loops, the one across the symmetry plane and long
+    enough stays (a neck cut); a mirrored pair of eye holes, however long, and a short hole on the
+    plane go, and the main loop is found again among what stays."""
+    import trimesh
+
+    from autobones.cut_cues import cut_cues, midline_cuts
+
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    V, F = np.asarray(sphere.vertices), np.asarray(sphere.faces)
+    front = V[:, 2] > 0
+    at = lambda inside: inside[F].any(axis=1)   # the faces round the vertices inside
+    holes = {"eye_l": at(((V[:, 0] - 0.45) ** 2 + (V[:, 1] - 0.3) ** 2 < 0.1) & front),
+             "eye_r": at(((V[:, 0] + 0.45) ** 2 + (V[:, 1] - 0.3) ** 2 < 0.1) & front),
+             "bolt": at(np.arange(len(V)) == np.argmax(V @ [0.0, 0.9, 0.43])),   # one vertex's fan
+             "neck": at(V[:, 1] < -0.92)}
+    assert all(h.sum() for h in holes.values())
+    cues = cut_cues(V, F[~np.any(list(holes.values()), axis=0)])
+    assert len(np.unique(cues["rim_loop"])) == 4
+    kept = midline_cuts(cues, np.array([1.0, 0.0, 0.0]), 0.0)
+    assert len(np.unique(kept["rim_loop"])) == 1
+    assert kept["rim_mid"][:, 1].max() < -0.85          # only the neck's rim
+    assert kept["loop_normal"] @ np.array([0.0, -1.0, 0.0]) > 0.99
+    # without the neck nothing is left: a closed head with holes
+    closed = F[~np.any([holes[k] for k in ("eye_l", "eye_r", "bolt")], axis=0)]
+    none = midline_cuts(cut_cues(V, closed), np.array([1.0, 0.0, 0.0]), 0.0)
+    assert len(none["rim_length"]) == 0 and none["loop_normal"] is None
+
+
+@pytest.mark.parametrize("copy", ["as-is", "rot1", "rot2", "x1000"])
+def test_a_cartoon_head_with_eye_holes_is_not_laid_face_down(copy):
+    """Blender's Suzanne (tests/data/blender): a closed cartoon head but for its eye sockets and open
+    eyeballs. Its sockets sit in the lowest tenth along its back, so they read as a cut there and
+    stood it upside down (up 160 deg off, its subdivided copy lying face down). Holes in mirrored
+    pairs are no cut: up and front within 30 deg of the file's +Y / +Z (its modelled frame), in any
+    rotation and unit."""
+    from pathlib import Path
+
+    from scipy.spatial.transform import Rotation
+
+    V, F = load_mesh(Path(__file__).parent / "data" / "blender" / "suzanne.obj")
+    Q = Rotation.random(random_state=int(copy[3:])).as_matrix() if copy.startswith("rot") else np.eye(3)
+    frame = detect_frame((1000.0 if copy == "x1000" else 1.0) * V @ Q.T, F)
+    back = frame.rotation @ Q
+    assert np.degrees(np.arccos(np.clip(back[1] @ [0.0, 1.0, 0.0], -1, 1))) < 30
+    assert np.degrees(np.arccos(np.clip(back[2] @ [0.0, 0.0, 1.0], -1, 1))) < 30

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cut_cues import cut_cues, is_planar_cut
+from ..cut_cues import cut_cues, is_planar_cut, midline_cuts
 from ..geometry.head_share import (STILL, apply_head_share, face_only, head_share, mask_distance, neck_base_height,
                                    smooth_share)
 from ..geometry.smooth import smoothstep
@@ -81,6 +81,7 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     chin = [canonical(landmarks[n])[0] for n in CHIN if n in landmarks]
     chin = (min(p[1] for p in chin), max(p[2] for p in chin)) if chin else None
     cues = cut_cues(V, F) if cues is None else cues
+    cues = midline_cuts(cues, frame.rotation[0], frame.origin @ frame.rotation[0])  # an eye hole is no cut
     cut = (canonical(cues["loop_centre"])[0], cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
     hold = 1.0 - smoothstep(np.minimum(mask_distance(C, facial_mask, FACE_HOLD), FACE_HOLD) / FACE_HOLD)
     share = head_share(C, joint, faces=F, chin=chin, face_only=face_only(C, F), face=hold, cut=cut, keep_chin=True)
