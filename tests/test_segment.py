@@ -37,6 +37,25 @@ def test_facial_mask_excludes_the_neck_but_keeps_mouth_and_chin():
     assert not seg.facial_mask[C[:, 1] < P[1, 1] - 0.05].any(), "nothing well below the chin"
 
 
+def test_a_head_with_no_neck_keeps_its_muzzle_in_the_face():
+    """Blender's Suzanne (tests/data/blender) Loop-subdivided twice: no chin step under its muzzle
+    (the midline profile's most anterior point), so the face was cut at the depth groups' split,
+    through its eyes, and the muzzle went to the neck (0.54 of the face group kept). A cut above the
+    nose tip is no chin: the whole face group, muzzle included, is the facial mask."""
+    from pathlib import Path
+
+    import trimesh
+
+    V, F = load_mesh(Path(__file__).parent / "data" / "blender" / "suzanne.obj")
+    V, F = trimesh.remesh.subdivide_loop(V, F, iterations=2)
+    frame = detect_frame(V, F)
+    C = frame.to_canonical(V)
+    seg = segment_head(C, F)
+    assert seg.chin_height is None                      # the case: no chin step found
+    assert seg.facial_mask[np.argmax(C[:, 2])]          # the muzzle's tip
+    assert seg.facial_mask.sum() >= 0.95 * (seg.labels == FACE).sum()
+
+
 def test_bones_connected_and_ordered():
     C, F, _ = _canonical("misc/goathead.obj")
     seg = segment_head(C, F)

@@ -32,7 +32,7 @@ from .joints import MASK_CHIN, Joints, find_joints, head_length, height_profile
 
 JOINT_SAMPLES = 16000
 CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's length is read in
-TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (module _chin_height)
+TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (_nose_tip)
 JAW_FRONT = 0.1       # head sizes: a long head's chin step starts at most this far behind the nose tip
 THROAT = 0.18         # head sizes: a step starting further behind the nose tip is a throat's (human chins 0.07-0.16)
 
@@ -140,9 +140,12 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     # down the neck, took the lips for its chin, and the joints then scaled the pivot by the whole scan)
     lowest = MASK_CHIN * float(np.ptp(Vm[:, 1])) if mask else None
     found = _chin_height(profile, length, top, below_top=lowest)
+    tip = _nose_tip(profile, length, top)
     for h, is_chin in ((found, True), (neck_height, False)):
-        # a cut that leaves less than a third of the facial group is no chin (cartoons, animals)
-        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3:
+        # a cut that leaves less than a third of the facial group is no chin (cartoons, animals), nor
+        # one above the nose tip: the depth groups' split of a head with no neck (Blender's Suzanne,
+        # whose muzzle is its most anterior point) ran through its eyes and left the muzzle as neck
+        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3 and (tip is None or h < tip[1]):
             cut, chin = h, (h if is_chin else None)
             break
     joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask, pivot)
@@ -290,6 +293,18 @@ def _carry(sample_value, sample_label, value):
     return np.where(left_closer, sl[i - 1], sl[i])
 
 
+def _nose_tip(points, length, top, strip=0.03):
+    """The midline profile's most anterior point (3,) above ``TIP_FLOOR`` head lengths below the top
+    (a bust's chest can stand further forward than the nose: vertex-pronasale is about 0.65 head
+    lengths, the chest below 1.3), or None with fewer than 20 points in the midline ``strip``.
+    ``points``, ``length`` and ``top`` as :func:`_chin_height`'s."""
+    mid = points[np.abs(points[:, 0]) < strip]
+    if len(mid) < 20:
+        return None
+    head = mid[mid[:, 1] > top - TIP_FLOOR * length]
+    return head[np.argmax(head[:, 2])] if len(head) else None
+
+
 def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01):
     """Height of the menton, or None if no chin step is found.
 
@@ -306,14 +321,10 @@ def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01)
     only steps at least this far below ``top`` count (a face mask's).
     """
     mid = points[np.abs(points[:, 0]) < strip]
-    if len(mid) < 20:
+    tip = _nose_tip(points, length, top, strip)
+    if tip is None:
         return None
-    # a bust's chest can stand further forward than the nose: the tip is sought above the
-    # level of the mouth (vertex-pronasale about 0.65 head lengths, the chest below 1.3)
-    head = mid[mid[:, 1] > top - TIP_FLOOR * length]
-    if len(head) == 0:
-        return None
-    tip_y = head[np.argmax(head[:, 2]), 1]
+    tip_y = tip[1]
     below = mid[mid[:, 1] < tip_y]
     if len(below) < 10:
         return None
