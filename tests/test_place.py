@@ -126,3 +126,20 @@ def test_merge_tree_can_be_cut_at_other_group_counts(rigs):
     side = rig.sidecar()
     d = side["depth_merge_distances"]
     assert d == sorted(d, reverse=True) and len(d) == 8
+
+
+def test_a_head_with_no_neck_turns_whole():
+    """Blender's Suzanne (tests/data/blender) ends at its chin: no cut, no neck. Its lowest vertices
+    were held still as a neck's base, so a head turn left the muzzle's tip behind and sheared the
+    muzzle. Recorded as ``no_neck``; on a 15 degree turn about the head joint every vertex moves with
+    the head (neck share < 1e-6), and a head cut at the neck keeps its base still as before."""
+    from pathlib import Path
+
+    rig = autobones.place(Path(__file__).parent / "data" / "blender" / "suzanne.obj", density="sparse")
+    assert "no_neck" in rig.other["joints"]["neck"]["cues"]
+    neck = rig.skeleton.names.index("neck")
+    assert rig.weights[:, neck].max() < 1e-6
+    cut = autobones.place(data("ict/identity000.obj"), density="sparse")
+    assert "no_neck" not in cut.other["joints"]["neck"]["cues"]
+    C = cut.frame.to_canonical(cut.vertices)
+    assert cut.weights[C[:, 1] <= C[:, 1].min() + 0.02, cut.skeleton.names.index("neck")].min() > 0.999

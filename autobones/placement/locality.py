@@ -17,7 +17,7 @@ facial bones), each step a smooth (C1) factor, so no seam appears:
    through the head joint (the occiput-C1 pivot, :mod:`.joints`) that passes under the chin, the
    neck base pure neck. The face and ``FACE_HOLD`` times its band keep the whole share wherever
    they hang (a long muzzle below any boundary through the pivot). Above the blend band (the top
-   of the skull) nothing is neck.
+   of the skull) nothing is neck; on a head with no neck (a closed head ending at its chin), nothing.
 
 The rows stay non-negative and sum to one (each step moves weight between bones), and are pruned
 again as the heat weights were. Everything is computed per vertex in the canonical frame (head
@@ -39,7 +39,7 @@ CHUNK = 65536
 
 
 def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, faces=None, band=FACIAL_BAND,
-                     chin=None, face_only=False, prune=0.01, cut=None):
+                     chin=None, face_only=False, prune=0.01, cut=None, no_neck=False):
     """Restrict bone-heat weights to stay local (module docstring); in place, and returned.
 
     Parameters
@@ -66,6 +66,9 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
         :func:`autobones.geometry.head_share.head_share`.
     prune : float
         Weights below this fraction of their row's largest are zeroed afterwards (0: none).
+    no_neck : bool
+        The head has no neck (a closed head ending at its chin): all of it turns with the head, the
+        neck bone weighs nothing.
 
     Returns
     -------
@@ -95,7 +98,8 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
 
     # 2. the head's share (head and facial bones) from the boundary through the pivot, and all of the
     # face and its band (a long muzzle hangs below any plane through the pivot); the rest is neck
-    share = head_share(C, joint, faces=faces, chin=chin, face_only=face_only, face=hold, cut=cut)
+    share = np.ones(n) if no_neck else head_share(C, joint, faces=faces, chin=chin, face_only=face_only,
+                                                  face=hold, cut=cut)
     apply_head_share(W, share, neck=neck, head=head)
 
     np.clip(W, 0.0, None, out=W)

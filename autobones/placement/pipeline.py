@@ -18,6 +18,7 @@ from .facial_bones import bone_count, check_seed, facial_bones
 from ..io.mesh import resolve_mesh, stray_parts
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
+from ..geometry.topology import used_vertices
 from ..orient import Frame, detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -27,6 +28,8 @@ from .locality import restrict_weights
 from .skin_weights import PROXY_ABOVE, PROXY_VERTICES, WELD_TOL, bone_heat_weights
 
 log = logging.getLogger("autobones")
+
+NO_NECK = 0.01   # head sizes: a menton this close to the lowest vertex has no neck under it (_no_neck)
 
 
 def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
@@ -96,6 +99,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     pivot, note = _face_mask_pivot(C, F)
     lap("face_landmarks")
     seg = segment_head(C, F, volume=coarse, pivot=pivot)
+    if _no_neck(C, F, seg.joints, frame):
+        seg.joints.cues["neck"].append("no_neck")
     lap("segment")
     heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
     lap("facial")
@@ -151,8 +156,20 @@ def _local_weights(C, F, skel_c, proxy, seg, frame):
     joints = seg.joints
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
                      chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"],
-                     cut=frame.cut)
+                     cut=frame.cut, no_neck="no_neck" in joints.cues["neck"])
     return W
+
+
+def _no_neck(C, F, joints, frame):
+    """Whether the head has no neck under its chin: no planar cut (``frame.cut``), no face mask, and
+    its menton (``joints``, :mod:`.joints`) within ``NO_NECK`` head sizes of its lowest vertex (of
+    ``C`` (n, 3) canonical, used by ``F``). Its lowest vertices are then its chin, which must turn
+    with the head: held still as a neck's base, Blender's Suzanne's muzzle tip stayed behind on a
+    head turn and the muzzle sheared. (The mentons of the shared heads with no cut and no face mask
+    lie 0.038-0.46 head sizes above their lowest vertex, Suzanne's 0.000-0.001.)"""
+    if frame.cut is not None or "face_only" in joints.cues["head"]:
+        return False
+    return joints.menton - float(C[used_vertices(F, len(C)), 1].min()) <= NO_NECK
 
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
