@@ -52,7 +52,9 @@ from autobones.io.mesh import load_mesh  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 TESTS_LM = ROOT / "tests" / "landmarks"
-FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in tests/ start with "tests/"
+FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in tests/ start with "tests/", meshes
+    # in the project too (Blender's Suzanne: program output, tests/data/LICENSES.md) with "tests/data/"
+    "suzanne": ("tests/data/blender/suzanne.obj", "tests/suzanne.landmarks.json"),
     "james": ("menpo3d/james.obj", "menpo3d/james.landmarks.json"),
     "template": ("menpo3d/template.ply", "menpo3d/template.landmarks.json"),
     **{f"identity00{k}": (f"ict/identity00{k}.obj", f"ict/identity00{k}.landmarks.json") for k in range(3)},
@@ -86,8 +88,9 @@ def heads_in(data):
             out[name] = (mesh, lm)
     for name, (mesh, lm) in FIXED.items():
         lm = None if lm is None else (TESTS_LM / lm[6:] if lm.startswith("tests/") else data / lm)
-        if (data / mesh).exists():
-            out[name] = (data / mesh, lm)
+        mesh = ROOT / mesh if mesh.startswith("tests/data/") else data / mesh
+        if mesh.exists():
+            out[name] = (mesh, lm)
     return out
 
 
