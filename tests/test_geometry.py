@@ -9,7 +9,8 @@ from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
 from autobones.geometry.rotations import rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
-from autobones.geometry.topology import boundary_vertices, largest_part, mesh_edges, mesh_parts, weld
+from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
+                                         weld_by_size, widest_part)
 from autobones.geometry.validate import mesh_arrays
 from autobones.io.mesh import load_mesh
 from shared_data import data, icosphere
@@ -59,6 +60,27 @@ def test_largest_part_is_a_mesh_of_its_own():
     np.testing.assert_array_equal(index, [3, 4, 5, 6])
     np.testing.assert_array_equal(Vs, V[3:])
     np.testing.assert_array_equal(Vs[Fs], V[F[1:]])
+
+
+def test_part_areas_and_the_widest_part_go_by_area_not_by_vertex_count():
+    # a big single triangle (3 vertices, area 50) beside a small fan of 4 triangles (6 vertices, area 2)
+    V = np.array([[0, 0, 5], [10, 0, 5], [0, 10, 5], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [-1, 0, 0],
+                  [0, -1, 0]], dtype=float)
+    F = np.array([[0, 1, 2], [3, 4, 5], [3, 5, 6], [3, 6, 7], [3, 7, 8]])
+    part, area = part_areas(V, F)
+    assert part[0] == part[1] == part[2] != part[3]
+    np.testing.assert_allclose(sorted(area), [2.0, 50.0])
+    np.testing.assert_array_equal(widest_part(V, F), [True] * 3 + [False] * 6)
+    assert largest_part(V, F)[2].tolist() == [3, 4, 5, 6, 7, 8]          # the most vertices: the fan
+
+
+def test_weld_by_size_welds_alike_in_any_unit():
+    V, F = icosphere(1)
+    Vd = np.vstack([V, V[:3] + 1e-9])                                     # three copies a hair apart
+    Fd = np.vstack([F, [[len(V), len(V) + 1, len(V) + 2]]])
+    for scale in (1e-3, 1.0, 1e3):
+        Vw, Fw, index = weld_by_size(scale * Vd, Fd)
+        assert len(Vw) == len(V) and (index[len(V):] == index[:3]).all()
 
 
 def test_weld_merges_copies_and_drops_collapsed_faces():

@@ -37,6 +37,44 @@ def mesh_parts(n, F):
     return connected_components(A, directed=False)[1]
 
 
+def part_areas(V, F):
+    """Connected parts of a mesh and their areas.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    part : (n,) int
+        Each vertex's part (:func:`mesh_parts`; a face's part is its first vertex's).
+    area : (k,) float
+        Each part's area, mesh units squared.
+    """
+    V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
+    part = mesh_parts(len(V), F)
+    face_area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    return part, np.bincount(part[F[:, 0]], weights=face_area, minlength=int(part.max()) + 1 if len(part) else 1)
+
+
+def widest_part(V, F):
+    """(n,) bool: the vertices of the connected part with the largest area (the skin of a head with
+    separate hair, eyeballs, teeth or lashes); ``V`` (n, 3), ``F`` (m, 3). All of them for a mesh
+    of no area."""
+    part, area = part_areas(V, F)
+    if not len(F) or area.sum() <= 0:
+        return np.ones(len(V), dtype=bool)
+    return part == int(np.argmax(area))
+
+
+def weld_by_size(V, F, share=2e-6):
+    """:func:`weld` with a tolerance of ``share`` of the used vertices' largest distance from their
+    centroid: free of the file's unit and axes (a turned or scaled copy welds alike)."""
+    h = V[used_vertices(F, len(V))]
+    return weld(V, F, share * np.sqrt(((h - h.mean(axis=0)) ** 2).sum(axis=1).max()))
+
+
 def largest_part(V, F):
     """The largest connected part (most vertices) of a mesh as a mesh of its own.
 
