@@ -12,7 +12,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .geometry.normals import triangle_normals
-from .geometry.topology import used_vertices, weld_by_size, widest_part
+from .geometry.topology import used_vertices, weld_by_size
 
 # an open-rim loop shorter than this times the square root of the surface's area is a hole, never a
 # cut (the shared heads' neck cuts and bust bases: 0.70-3.2; the robot's bolt holes 0.05, the menpo
@@ -38,13 +38,11 @@ def cut_cues(V, F):
     if len(rim):
         graph = coo_matrix((np.ones(len(rim)), (rim[:, 0], rim[:, 1])), shape=(len(Vw), len(Vw)))
         loop = connected_components(graph, directed=False)[1][rim[:, 0]]
-        on_main = widest_part(Vw, Fw)[rim[:, 0]]
     else:
-        loop, on_main = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+        loop = np.zeros(0, dtype=np.int64)
     cues = {"centroid": (V[F[:, 0]] + V[F[:, 1]] + V[F[:, 2]]) / 3.0, "normal": normal, "area2": area2, "heights": heights,
             "rim_mid": 0.5 * (Vw[rim[:, 0]] + Vw[rim[:, 1]]),
-            "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1), "rim_loop": loop,
-            "rim_on_main": on_main}
+            "rim_length": np.linalg.norm(Vw[rim[:, 0]] - Vw[rim[:, 1]], axis=1), "rim_loop": loop}
     cues.update(_main_loop(cues))
     return cues
 
@@ -70,11 +68,9 @@ def midline_cuts(cues, normal, offset):
     np.maximum.at(hi, loop, side)
     length = np.bincount(loop, weights=cues["rim_length"])
     keep = (lo[loop] < 0.0) & (hi[loop] > 0.0) & (length[loop] >= HOLE * np.sqrt(cues["area2"].sum() / 2.0))
-    keep &= cues["rim_on_main"]
     if keep.all():
         return cues
-    out = dict(cues, rim_mid=cues["rim_mid"][keep], rim_length=cues["rim_length"][keep], rim_loop=loop[keep],
-               rim_on_main=cues["rim_on_main"][keep])
+    out = dict(cues, rim_mid=cues["rim_mid"][keep], rim_length=cues["rim_length"][keep], rim_loop=loop[keep])
     out.update(_main_loop(out))
     return out
 

@@ -49,7 +49,7 @@ from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
-from .geometry.topology import boundary_vertices, part_areas, used_vertices, weld_by_size
+from .geometry.topology import used_vertices, without_large_parts
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
 __all__ = ["Frame", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis", "reflect",
@@ -72,9 +72,11 @@ FACE_UNLIKE = 0.28
 # better than this share of the whole reference head stood on that cut does (the shared heads' front
 # halves and quarters: 0.25-0.70 of it; the zoo's wide-necked armadillo and beast: 0.85-0.94)
 FACE_VS_NECK = 0.75
-# an open part beside the skin covering this share of the area is a shell (hair, a beard) the frame's
-# sample leaves out (the shared heads' other open parts: ICT's mouth 0.085, lashes under 0.01)
+# a part beside the skin (the widest part, when it covers SKIN_LEAD times the next) covering this share
+# of the area (hair, a beard) is left out of the frame (the shared heads' other parts: ICT's mouth
+# 0.085, eyeballs 0.018; the robot's 0.075 and less); a face mask under a wig as large has no clear skin
 SHELL = 0.1
+SKIN_LEAD = 1.3
 
 
 @dataclass(frozen=True)
@@ -176,7 +178,10 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     -------
     Frame
     """
-    P, _, _ = sample_surface(V, _without_shells(V, F), SAMPLE_COUNT, seed=0)
+    # the frame is found from the head without large parts beside it (hair, a beard: open shells or
+    # closed volumes), which the bald reference overlays badly and whose rims read as cuts
+    head = without_large_parts(V, F, SHELL, SKIN_LEAD)
+    P, _, _ = sample_surface(V, head, SAMPLE_COUNT, seed=0)
     center = P.mean(axis=0)
     rms = np.sqrt(((P - center) ** 2).sum(axis=1).mean())
     tree = cKDTree(P)
@@ -190,9 +195,9 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         sym_err = mirror_error(P, tree, normal, offset) / rms
         candidates, cues = [(up_v, front_v)], None
     else:
-        sym_err, normal, offset, cues = _symmetry_plane(V, F, P, tree, rms, up_v, front_v)
+        sym_err, normal, offset, cues = _symmetry_plane(V, head, P, tree, rms, up_v, front_v)
     if cues is None:
-        cues = _cut_cues(V, F)  # only the frame's cut needs them when up is forced
+        cues = _cut_cues(V, head)  # only the frame's cut needs them when up is forced
     cues = midline_cuts(cues, normal, offset)  # holes in mirrored pairs are no cut
     if up_v is None or front_v is None:
         # free (nothing forced): no step reads the file's axes, so a turned or scaled copy of a head
@@ -203,23 +208,6 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
     up_d, front_d = _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v)
     return _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err)
-
-
-def _without_shells(V, F):
-    """``F`` without the large open shells beside the skin: connected parts other than the widest one
-    that have an open rim and cover ``SHELL`` of the area or more (a hair cap, a beard), which the
-    bald reference head overlays badly: they turned Lee Perry-Smith and Demosthenes round when given
-    a hair shell. Closed parts (eyeballs, teeth, a robot's blocks) and small open ones (lashes, a
-    mouth's inside) stay, so a head without such shells gives its sample as before."""
-    Vw, Fw, index = weld_by_size(V, F)
-    part, area = part_areas(Vw, Fw)
-    if len(area) < 2:
-        return F
-    open_part = np.zeros(len(area), dtype=bool)
-    open_part[part[boundary_vertices(len(Vw), Fw)]] = True
-    drop = open_part & (area >= SHELL * area.sum())
-    drop[int(np.argmax(area))] = False
-    return F[~drop[part[index[F[:, 0]]]]] if drop.any() else F
 
 
 def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):

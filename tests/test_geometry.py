@@ -10,7 +10,7 @@ from autobones.geometry.normals import triangle_normals, vertex_normals
 from autobones.geometry.rotations import rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
-                                         weld_by_size, widest_part)
+                                         weld_by_size, without_large_parts)
 from autobones.geometry.validate import mesh_arrays
 from autobones.io.mesh import load_mesh
 from shared_data import data, icosphere
@@ -62,16 +62,22 @@ def test_largest_part_is_a_mesh_of_its_own():
     np.testing.assert_array_equal(Vs[Fs], V[F[1:]])
 
 
-def test_part_areas_and_the_widest_part_go_by_area_not_by_vertex_count():
-    # a big single triangle (3 vertices, area 50) beside a small fan of 4 triangles (6 vertices, area 2)
+def test_part_areas_and_large_parts_go_by_area_not_by_vertex_count():
+    # a big triangle (3 vertices, area 50) beside a small fan of 4 triangles (6 vertices, area 2)
     V = np.array([[0, 0, 5], [10, 0, 5], [0, 10, 5], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [-1, 0, 0],
                   [0, -1, 0]], dtype=float)
     F = np.array([[0, 1, 2], [3, 4, 5], [3, 5, 6], [3, 6, 7], [3, 7, 8]])
     part, area = part_areas(V, F)
     assert part[0] == part[1] == part[2] != part[3]
     np.testing.assert_allclose(sorted(area), [2.0, 50.0])
-    np.testing.assert_array_equal(widest_part(V, F), [True] * 3 + [False] * 6)
     assert largest_part(V, F)[2].tolist() == [3, 4, 5, 6, 7, 8]          # the most vertices: the fan
+    # the fan covers 2 / 52 of the area: a large part beside the widest from 3% up, not from 10%
+    np.testing.assert_array_equal(without_large_parts(V, F, share=0.03), F[:1])
+    assert without_large_parts(V, F) is F
+    # a second part as wide as the first leaves no clear main part: nothing dropped
+    V2 = np.vstack([V[:3], V[:3] + [0, 0, 20.0]])
+    np.testing.assert_array_equal(without_large_parts(V2, np.array([[0, 1, 2], [3, 4, 5]]), share=0.03),
+                                  [[0, 1, 2], [3, 4, 5]])
 
 
 def test_weld_by_size_welds_alike_in_any_unit():

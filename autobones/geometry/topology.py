@@ -58,14 +58,36 @@ def part_areas(V, F):
     return part, np.bincount(part[F[:, 0]], weights=face_area, minlength=int(part.max()) + 1 if len(part) else 1)
 
 
-def widest_part(V, F):
-    """(n,) bool: the vertices of the connected part with the largest area (the skin of a head with
-    separate hair, eyeballs, teeth or lashes); ``V`` (n, 3), ``F`` (m, 3). All of them for a mesh
-    of no area."""
-    part, area = part_areas(V, F)
-    if not len(F) or area.sum() <= 0:
-        return np.ones(len(V), dtype=bool)
-    return part == int(np.argmax(area))
+def without_large_parts(V, F, share=0.1, lead=1.3):
+    """``F`` without the large parts beside the widest one: connected parts (after
+    :func:`weld_by_size`) other than the one with the largest area that cover ``share`` of the area
+    or more, when the widest covers at least ``lead`` times the next (else, with no clear main part,
+    all of ``F``).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    share, lead : float
+
+    Returns
+    -------
+    (m', 3) int
+        The rows of ``F`` kept, in their order (``F`` itself when none is dropped).
+    """
+    F = np.asarray(F)
+    if not len(F):
+        return F
+    Vw, Fw, index = weld_by_size(np.asarray(V, dtype=np.float64), F)
+    part, area = part_areas(Vw, Fw)
+    if len(area) < 2:
+        return F
+    first, second = np.argsort(area)[::-1][:2]
+    if area[first] < lead * area[second]:
+        return F
+    drop = area >= share * area.sum()
+    drop[first] = False
+    return F[~drop[part[index[F[:, 0]]]]] if drop.any() else F
 
 
 def weld_by_size(V, F, share=2e-6):
