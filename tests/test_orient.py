@@ -322,28 +322,6 @@ def test_a_cartoon_head_with_eye_holes_is_not_laid_face_down(copy):
     assert np.degrees(np.arccos(np.clip(back[2] @ [0.0, 0.0, 1.0], -1, 1))) < 30
 
 
-def _with_hair(V, F, frame, cover, lift, closed=False):
-    """``(V, F)`` with hair: a separate copy of the scalp (every face within ``cover`` of the height from
-    the top, and the back of the head's upper half) lifted ``lift`` head sizes along the normals, in
-    the input frame; an open shell, or ``closed``: a volume down to 0.003 head sizes off the scalp."""
-    from autobones.geometry.normals import vertex_normals
-
-    C = frame.to_canonical(V)
-    N = vertex_normals(C, F)
-    y, z = C[:, 1], C[:, 2]
-    scalp = (y > y.max() - cover * np.ptp(y)) | ((z < z.min() + 0.25) & (y > y.min() + 0.5 * np.ptp(y)))
-    used, S = np.unique(F[scalp[F].all(axis=1)], return_inverse=True)
-    S, k = S.reshape(-1, 3), len(used)
-    H, HF = C[used] + lift * N[used], S
-    if closed:
-        E = np.concatenate([S[:, [0, 1]], S[:, [1, 2]], S[:, [2, 0]]])
-        key = np.sort(E, axis=1) @ [k, 1]
-        rim = E[np.isin(key, np.flatnonzero(np.bincount(key) == 1))]    # edges of one face: the shell's rim
-        walls = np.vstack([np.c_[rim[:, 1], rim[:, 0], rim[:, 1] + k], np.c_[rim[:, 1] + k, rim[:, 0], rim[:, 0] + k]])
-        H, HF = np.vstack([H, C[used] + 0.003 * N[used]]), np.vstack([S, S[:, ::-1] + k, walls])
-    return np.vstack([V, frame.from_canonical(H)]), np.vstack([F, HF + len(V)])
-
-
 @pytest.mark.parametrize("rel,cover,lift,closed", [("misc/LeePerrySmith.obj", 0.35, 0.03, False),
                                                     ("ict/identity000.obj", 0.35, 0.015, False),
                                                     ("misc/LeePerrySmith.obj", 0.25, 0.03, True)])
@@ -353,11 +331,17 @@ def test_hair_does_not_turn_the_head(rel, cover, lift, closed):
     reference head overlaid the haired skull badly (Lee Perry-Smith faced backwards). A part beside
     the skin covering a tenth of the area or more is left out of the frame (its sample and its cuts):
     within 5 deg of the bare head's frame (Lee exact, ICT 2.1 deg), turned at random."""
+    import sys
+    from pathlib import Path
+
     from scipy.spatial.transform import Rotation
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from accessories import with_hair   # the copies benchmarks/accessories.py measures
 
     V, F = load_mesh(data(rel))
     bare = detect_frame(V, F)
-    Vh, Fh = _with_hair(V, F, bare, cover, lift, closed)
+    Vh, Fh = with_hair(V, F, bare, cover, lift, closed)
     Q = Rotation.random(random_state=7).as_matrix()
     frame = detect_frame(Vh @ Q.T, Fh)
     back = frame.rotation @ Q
