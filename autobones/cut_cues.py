@@ -47,7 +47,6 @@ def cut_cues(V, F):
     return cues
 
 
-
 def midline_cuts(cues, normal, offset):
     """``cues`` with only the open-rim loops that may be cuts, the main loop found again among them:
     those that reach across the symmetry plane ``normal . x = offset`` (unit ``normal`` (3,)) and

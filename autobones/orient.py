@@ -23,6 +23,8 @@ Method
    degrees), and the angle between the best one and its neighbours is settled by a golden-section
    search. A head no human face matches that is cut at the neck stands on its cut instead
    (:func:`autobones.cut_cues.cut_up_front`).
+   Throughout, a connected part beside the skin covering a tenth of the area or more (hair, a beard,
+   as a shell or a volume) is left out (:func:`autobones.geometry.topology.without_large_parts`).
 3. With landmarks (``frame_from_landmarks``), the frame comes from them instead.
 
 Unless ``up`` or ``front`` is forced, no step reads the file's axes (the sample's faces and

@@ -3,6 +3,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from .areas import triangle_areas
+
 
 def sorted_unique(a):
     """``np.unique`` of an int array ``(k,)`` -> sorted ``(u,)``, by one sort: numpy 2.4's default hash
@@ -54,8 +56,7 @@ def part_areas(V, F):
     """
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
     part = mesh_parts(len(V), F)
-    face_area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-    return part, np.bincount(part[F[:, 0]], weights=face_area, minlength=int(part.max()) + 1 if len(part) else 1)
+    return part, np.bincount(part[F[:, 0]], weights=triangle_areas(V, F), minlength=int(part.max()) + 1 if len(part) else 1)
 
 
 def without_large_parts(V, F, share=0.1, lead=1.3):
