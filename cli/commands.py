@@ -30,7 +30,11 @@ def cmd_place(args):
     print(f"{written[0]}: {len(rig.skeleton)} bones ({rig.options['facial_bones']} facial), "
           f"{len(rig.vertices)} vertices, up {rig.frame.up}, front {rig.frame.front}, "
           f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
-    head = ((rig.other or {}).get("joints") or {}).get("head", {})
+    joints = (rig.other or {}).get("joints") or {}
+    head = joints.get("head", {})
+    if "no_neck" in joints.get("neck", {}).get("cues", []):
+        print("joints: no neck (a closed head ending at its chin): the whole head turns with the head bone and the "
+              "neck bone weighs nothing (sidecar joints.neck)")
     if "face_only" in head.get("cues", []):   # a mask's pivot is a guess from a face's proportions: say so
         how = ("from the face's automatic landmarks by a human's proportions" if "face_landmarks" in head["cues"]
                else "behind the nose by a face's proportions"

@@ -49,6 +49,17 @@ def test_place_says_when_the_head_is_a_face_mask(tmp_path):
     assert head.returncode == 0 and "face mask" not in head.stdout, head.stdout
 
 
+def test_place_says_when_the_head_has_no_neck(tmp_path):
+    from pathlib import Path
+
+    suzanne = Path(__file__).parent / "data" / "blender" / "suzanne.obj"
+    r = run(["place", str(suzanne), "-o", str(tmp_path / "suzanne.glb"), "--density", "sparse"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.strip().splitlines()
+    assert len(lines) == 2 and lines[1].startswith("joints: no neck"), r.stdout
+    assert "up +y, front +z" in lines[0]
+
+
 def test_place_density_output_and_verbose(tmp_path):
     # the goat's frame as the user gives it (found from its shape alone it is the same: test_orient's
     # closed bust), so --up/--front, the documented recourse, is exercised
