@@ -74,11 +74,15 @@ FACE_UNLIKE = 0.28
 # better than this share of the whole reference head stood on that cut does (the shared heads' front
 # halves and quarters: 0.25-0.70 of it; the zoo's wide-necked armadillo and beast: 0.85-0.94)
 FACE_VS_NECK = 0.75
-# a part beside the skin (the widest part, when it covers SKIN_LEAD times the next) covering this share
-# of the area (hair, a beard) is left out of the frame (the shared heads' other parts: ICT's mouth
-# 0.085, eyeballs 0.018; the robot's 0.075 and less); a face mask under a wig as large has no clear skin
+# a part beside the skin (the widest part, when it covers SKIN_LEAD times the next) covering SHELL of
+# the area and reaching SPREAD of the mesh's radius from its own centre (hair, a beard) is left out of
+# the frame. The shared heads' other parts: ICT's mouth 0.085 of the area (0.11-0.13 in ICT cut into a
+# mask, but reaching 0.29-0.30: a lump inside), eyeballs 0.018; the robot's 0.075 and less; hair copies
+# (benchmarks/accessories.py) 0.17-0.48, reaching 0.45-0.98. A face mask under a wig as large has no
+# clear skin: nothing is left out.
 SHELL = 0.1
 SKIN_LEAD = 1.3
+SPREAD = 0.4
 
 
 @dataclass(frozen=True)
@@ -182,7 +186,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     """
     # the frame is found from the head without large parts beside it (hair, a beard: open shells or
     # closed volumes), which the bald reference overlays badly and whose rims read as cuts
-    head = without_large_parts(V, F, SHELL, SKIN_LEAD)
+    head = without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)
     P, _, _ = sample_surface(V, head, SAMPLE_COUNT, seed=0)
     center = P.mean(axis=0)
     rms = np.sqrt(((P - center) ** 2).sum(axis=1).mean())

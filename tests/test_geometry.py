@@ -71,9 +71,15 @@ def test_part_areas_and_large_parts_go_by_area_not_by_vertex_count():
     assert part[0] == part[1] == part[2] != part[3]
     np.testing.assert_allclose(sorted(area), [2.0, 50.0])
     assert largest_part(V, F)[2].tolist() == [3, 4, 5, 6, 7, 8]          # the most vertices: the fan
-    # the fan covers 2 / 52 of the area: a large part beside the widest from 3% up, not from 10%
-    np.testing.assert_array_equal(without_large_parts(V, F, share=0.03), F[:1])
-    assert without_large_parts(V, F) is F
+    # a 10 x 10 square (area 100), a long sliver across it (10 x 1: area 5, spread over the mesh) and
+    # a lump inside (2 x 4: area 4, near the centre): from 3 % up only the sliver is a large part
+    sq = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], float)
+    sliver = np.array([[0, 0, 5], [10, 10, 5], [0, 1.414, 5]], float)
+    lump = np.array([[4, 4, 1], [6, 4, 1], [4, 8, 1]], float)
+    V3 = np.vstack([sq, sliver, lump])
+    F3 = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [7, 8, 9]])
+    np.testing.assert_array_equal(without_large_parts(V3, F3, share=0.03), F3[[0, 1, 3]])
+    assert without_large_parts(V3, F3) is F3                              # none covers 10 %
     # a second part as wide as the first leaves no clear main part: nothing dropped
     V2 = np.vstack([V[:3], V[:3] + [0, 0, 20.0]])
     np.testing.assert_array_equal(without_large_parts(V2, np.array([[0, 1, 2], [3, 4, 5]]), share=0.03),

@@ -59,17 +59,18 @@ def part_areas(V, F):
     return part, np.bincount(part[F[:, 0]], weights=triangle_areas(V, F), minlength=int(part.max()) + 1 if len(part) else 1)
 
 
-def without_large_parts(V, F, share=0.1, lead=1.3):
+def without_large_parts(V, F, share=0.1, lead=1.3, reach=0.4):
     """``F`` without the large parts beside the widest one: connected parts (after
-    :func:`weld_by_size`) other than the one with the largest area that cover ``share`` of the area
-    or more, when the widest covers at least ``lead`` times the next (else, with no clear main part,
-    all of ``F``).
+    :func:`weld_by_size`) other than the one with the largest area that cover ``share`` of the area or
+    more and reach ``reach`` of the mesh's radius or more from their own centre (the largest distance
+    of a vertex from the centroid; a part spread over the mesh, not a lump inside it), when the widest
+    covers at least ``lead`` times the next (else, with no clear main part, all of ``F``).
 
     Parameters
     ----------
     V : (n, 3) float
     F : (m, 3) int
-    share, lead : float
+    share, lead, reach : float
 
     Returns
     -------
@@ -88,6 +89,12 @@ def without_large_parts(V, F, share=0.1, lead=1.3):
         return F
     drop = area >= share * area.sum()
     drop[first] = False
+    used = np.zeros(len(Vw), dtype=bool)
+    used[Fw.ravel()] = True
+    radius = lambda P: float(np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).max()))
+    whole = radius(Vw[used])
+    for k in np.flatnonzero(drop):
+        drop[k] = radius(Vw[used & (part == k)]) >= reach * whole
     return F[~drop[part[index[F[:, 0]]]]] if drop.any() else F
 
 

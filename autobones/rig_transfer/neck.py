@@ -29,7 +29,7 @@ from ..cut_cues import cut_cues, is_planar_cut, midline_cuts
 from ..geometry.head_share import (STILL, apply_head_share, face_only, head_share, mask_distance, neck_base_height,
                                    smooth_share)
 from ..geometry.smooth import smoothstep
-from ..orient import SHELL, SKIN_LEAD
+from ..orient import SHELL, SKIN_LEAD, SPREAD
 from ..geometry.topology import used_vertices, without_large_parts
 
 FACE_HOLD = 0.16   # head sizes: the face keeps the head's whole share this far out (place's 2 x 0.08)
@@ -82,7 +82,7 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
     chin = [canonical(landmarks[n])[0] for n in CHIN if n in landmarks]
     chin = (min(p[1] for p in chin), max(p[2] for p in chin)) if chin else None
     # the cut of the head itself, not of a large part beside it (hair: its rim is no neck cut)
-    cues = cut_cues(V, without_large_parts(V, F, SHELL, SKIN_LEAD)) if cues is None else cues
+    cues = cut_cues(V, without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)) if cues is None else cues
     cues = midline_cuts(cues, frame.rotation[0], frame.origin @ frame.rotation[0])  # an eye hole is no cut
     cut = (canonical(cues["loop_centre"])[0], cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
     hold = 1.0 - smoothstep(np.minimum(mask_distance(C, facial_mask, FACE_HOLD), FACE_HOLD) / FACE_HOLD)
