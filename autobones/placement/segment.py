@@ -139,8 +139,8 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     # nose or lips): its depth is no cranium's length to expect the chin from (James' scan, which runs
     # down the neck, took the lips for its chin, and the joints then scaled the pivot by the whole scan)
     lowest = MASK_CHIN * float(np.ptp(Vm[:, 1])) if mask else None
-    found = _chin_height(profile, length, top, below_top=lowest)
     tip = _nose_tip(profile, length, top)
+    found = _chin_height(profile, tip, length, top, below_top=lowest)
     for h, is_chin in ((found, True), (neck_height, False)):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals), nor
         # one above the nose tip: the depth groups' split of a head with no neck (Blender's Suzanne,
@@ -305,7 +305,7 @@ def _nose_tip(points, length, top, strip=0.03):
     return head[np.argmax(head[:, 2])] if len(head) else None
 
 
-def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01):
+def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=0.01):
     """Height of the menton, or None if no chin step is found.
 
     Below the nose tip, the midline front profile of the head steps back
@@ -316,14 +316,14 @@ def _chin_height(points, length, top, below_top=None, strip=0.03, bin_size=0.01)
     that group's split: both moved with a few degrees of pitch (ICT's head pitched 0-10
     degrees found its chin at the lower lip at 4 of 8 angles).
 
-    ``points``: (k, 3) canonical surface points of the whole head; ``length`` the head's
-    length (:func:`.joints.head_length`), ``top`` its highest point; ``below_top``: when given,
+    ``points``: (k, 3) canonical surface points of the whole head; ``tip`` their nose tip
+    (:func:`_nose_tip`, None: no chin); ``length`` the head's length (:func:`.joints.head_length`),
+    ``top`` its highest point; ``below_top``: when given,
     only steps at least this far below ``top`` count (a face mask's).
     """
-    mid = points[np.abs(points[:, 0]) < strip]
-    tip = _nose_tip(points, length, top, strip)
     if tip is None:
         return None
+    mid = points[np.abs(points[:, 0]) < strip]
     tip_y = tip[1]
     below = mid[mid[:, 1] < tip_y]
     if len(below) < 10:
