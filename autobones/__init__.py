@@ -41,11 +41,12 @@ def build_rig(base, landmarks, **kwargs):
     see :func:`autobones.rig_building.build.build_rig`."""
     from .rig_building.build import build_rig as _build
     from .io.landmarks import resolve_landmarks
-    from .io.mesh import resolve_mesh
+    from .io.mesh import resolve_mesh, wound_outward
 
     from .io.landmark_checks import validate_landmarks
 
-    V, F, _ = resolve_mesh(base)
+    V, F, what = resolve_mesh(base)
+    F = wound_outward(V, F, what)[0]   # the generic skin is fitted by its normals: stored outward
     lm, source = resolve_landmarks(landmarks)
     # the unit and surface check transfer has (issue #33: landmarks in cm on a head in m built a rig 226 m off)
     lm = validate_landmarks(lm, V, F, min_count=1, source=source)

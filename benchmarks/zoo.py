@@ -1,6 +1,6 @@
 """The zoo benchmark (issue #31): every shared head and copies of it, checks that need no ground truth.
 
-    python benchmarks/zoo.py --quick                  # as-is, 2 rotations, x1000, decimated; checks 1-5
+    python benchmarks/zoo.py --quick                  # as-is, 2 rotations, x1000, decimated, flip, mirror; checks 1-5
     python benchmarks/zoo.py                          # every variant, checks 1-8
     python benchmarks/zoo.py --heads cowHead,camelhead --checks 1,2 --markdown
     python benchmarks/zoo.py --data /path/to/shared/data -j 2
@@ -9,8 +9,10 @@ Heads: every mesh of ``../shared/data`` with a landmark file (``zoo/*``, menpo3d
 ICT identities 000-002, the goat and the robot with ``tests/landmarks``' files) and the ``misc`` heads
 without landmarks (place-only checks). Variants: as is; 6 random rotations (seed 31); x0.001, x1000;
 remeshed (Loop x1, decimated back to the triangle count); decimated to 5k vertices (larger heads only);
-one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin.
-Landmarks follow the copy's rotation and scale (snapped to the surface on remeshed copies).
+one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin;
+every triangle wound inward (``flip``, normals into the head); the head's mirror image (``mirror``, x
+negated, written outward, left and right landmark names swapped). Landmarks follow the copy's rotation
+and scale (snapped to the surface on remeshed copies).
 
 Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
 1 frame: place's front / up within 30° of the landmarks'; rotated and scaled copies' frames mapped back
@@ -67,8 +69,8 @@ FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in
 HUMAN = {"human_man", "human_woman", "james", "template", "identity000", "identity001", "identity002",
          "LeePerrySmith", "demosthenes-low-res", "fran_cut"}
 VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, zc.ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
-            "jitter")
-QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k")
+            "jitter", "flip", "mirror")
+QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k", "flip", "mirror")
 COLUMNS = (("0 rig", 0), ("1 frame", 1), ("2 jaw", 2), ("3 neck P", 3), ("3 neck T", 3), ("4 pivot P", 4), ("4 pivot T", 4),
            ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("6 corr rot", 6), ("7 ARKit", 7), ("8 landmarks", 8))
 CELL_MAX = 52
@@ -146,7 +148,12 @@ class Head:
 
 
 def turned(ref, R):
-    return None if ref is None else {k: R @ v for k, v in ref.items()}
+    """The landmark frame ``ref`` of a copy ``x' = R x``; a mirror (det R < 0) keeps left = up x front."""
+    if ref is None:
+        return None
+    out = {k: R @ v for k, v in ref.items()}
+    out["left"] = np.cross(out["up"], out["front"])
+    return out
 
 
 def body_checks(head, var, rig, ref, checks, tag):
@@ -189,7 +196,7 @@ def transfer_checks(head, var, rig, details, checks):
     out.update(body_checks(head, var, rig, ref, checks, "T"))
     if 6 in checks and var.name == "as-is":
         head.corr0 = (details["correspondence"], details["reliable"], var.V, var.F)
-    elif 6 in checks and head.corr0 is not None and var.name != "jitter":
+    elif 6 in checks and head.corr0 is not None and var.name not in ("jitter", "mirror"):
         P0, ok0, V0, F0 = head.corr0
         p95, _ = zc.correspondence_offset(details["correspondence"], P0, ok0 & details["reliable"], V0, F0,
                                           var.back, var.snap)

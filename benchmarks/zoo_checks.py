@@ -20,6 +20,7 @@ from autobones.arkit.lids import eye_sides, gap_closure
 from autobones.geometry.closest import closest_points
 from autobones.geometry.rotations import axis_rotation
 from autobones.geometry.topology import used_vertices
+from autobones.io.landmark_names import mirror_name
 from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -109,6 +110,12 @@ def make_variant(name, V, F, lm, seed):
             return None
         Vn, Fn = remesh(V, F) if name == "remesh" else decimate(V, F)
         return Variant(name, Vn, Fn, snapped(lm, Vn, Fn), lm, core=np.ones(len(Vn), dtype=bool), snap=True)
+    if name == "flip":  # every triangle wound the other way: normals point in (a negative-scale export)
+        return Variant(name, V, F[:, ::-1].copy(), lm, lm, core=core)
+    if name == "mirror":  # the head's mirror image (another head), written with outward normals
+        M = np.diag([-1.0, 1.0, 1.0])
+        tl = None if lm is None else {mirror_name(n): M @ p for n, p in lm.items()}
+        return Variant(name, V @ M, F[:, ::-1].copy(), tl, tl, R=M, core=core)
     if name == "stray":
         size = float(np.ptp(V, axis=0).max())
         p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])

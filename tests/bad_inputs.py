@@ -161,6 +161,8 @@ def mesh_cases():
     Fw = F.copy()
     Fw[::2] = Fw[::2, ::-1]
     add("inconsistent_winding.obj", obj_bytes(V, Fw), "ok", why="every other face flipped: geometry is unchanged")
+    add("inside_out.obj", obj_bytes(V, F[:, ::-1]), "ok",
+        why="every triangle wound inward (a negative-scale export): rigged outward, written as given")
     parts_V, parts_F, off = [], [], 0
     for chunk in np.array_split(np.arange(len(F)), 40):  # 40 unwelded parts of the same surface
         used, inv = np.unique(F[chunk], return_inverse=True)

@@ -454,3 +454,18 @@ def stray_parts(V, F):
         return None
     return StrayParts(V, F, ~stray[part] | ~np.isin(np.arange(len(V)), used), stray[face_part], dropped / total,
                       int(stray.sum()))
+
+
+def wound_outward(V, F, source=None):
+    """``(F_out, note)``: the triangles ``F`` (m, 3) wound outward for the pipeline's normals, winding
+    numbers and views (:func:`autobones.geometry.winding.outward_faces`), and the sidecar's line saying
+    how many were turned (None when none were; logged once). The rig keeps the input's own ``F``."""
+    from ..geometry.winding import outward_faces
+
+    F_out, turned = outward_faces(V, F)
+    if not turned:
+        return F_out, None
+    note = (f"{turned} of {len(F)} triangles wound inward (normals into the head): the head was rigged with "
+            "them turned outward; its triangles are written as given")
+    log.warning("%s: %s", source or "mesh", note)
+    return F_out, note

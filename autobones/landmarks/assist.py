@@ -38,6 +38,7 @@ from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
 from ..geometry.topology import mesh_parts
 from ..geometry.validate import mesh_arrays
+from ..geometry.winding import outward_faces
 from ..io.landmark_checks import validate_landmarks
 from ..io.landmark_names import NAMES
 from ..orient import Frame, frame_from_landmarks
@@ -257,6 +258,7 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         A missing or unknown name, a bad coordinate, a bad mesh.
     """
     V, F = mesh_arrays(vertices, faces, "head mesh")
+    F = outward_faces(V, F)[0]   # the fit matches normals: an inside-out head fitted inside out
     given = check_given(given)
     validate_landmarks(given, V, F, min_count=len(REQUIRED), source="given landmarks")
     unit = float(np.linalg.norm(given["exocanthion_l"] - given["exocanthion_r"]))

@@ -43,6 +43,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
+from ..geometry.winding import outward_faces
 from ..io.landmark_names import NAMES, mirror_name
 from ..io.mesh import resolve_mesh
 from ..orient import Frame, detect_frame
@@ -164,7 +165,7 @@ class LandmarkDetector:
         (found when None, with ``up`` and ``front`` as given). Returns :class:`DetectedLandmarks`;
         raises AutobonesError when no face is found."""
         V = np.asarray(V, dtype=np.float64)
-        F = np.asarray(F, dtype=np.int64)
+        F = outward_faces(V, F)[0]   # the pictures are shaded by the normals: an inside-out head reads dark
         # the frame from the whole mesh (a clustered copy's rim and flat cut read differently), found
         # on a second thread while the pictured copy is made: both are mostly numpy outside the GIL;
         # the skin is the same in every frame the loop below tries

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from .facial_bones import bone_count, check_seed, facial_bones
-from ..io.mesh import resolve_mesh, stray_parts
+from ..io.mesh import resolve_mesh, stray_parts, wound_outward
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
 from ..geometry.topology import used_vertices
@@ -85,6 +85,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     body = stray_parts(V, F)
     if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
         return body.restore(place((body.V, body.F), density, up, front, random_state), source)
+    F_given, (F, turned) = F, wound_outward(V, F, source)   # rigged outward, written as given
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
     C = frame.to_canonical(V)
@@ -112,7 +113,9 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     joints = seg.joints.to_dict()
     if note:
         joints["head"]["face_landmarks"] = note   # why a face mask's pivot is the nose rule's
-    return Rig(vertices=V, faces=F, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
+    if turned:
+        options["faces_turned"] = turned
+    return Rig(vertices=V, faces=F_given, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
                timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
                neck_height_canonical=seg.neck_height, other={"joints": joints})

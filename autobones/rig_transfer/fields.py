@@ -343,10 +343,12 @@ def transfer_attributes(source_mesh, target_mesh, fields, source_landmarks, targ
     """
     from .correspondence import dense_correspondence
     from ..io.landmarks import resolve_landmarks
-    from ..io.mesh import resolve_mesh
+    from ..io.mesh import resolve_mesh, wound_outward
 
-    Vs, Fs, _ = resolve_mesh(source_mesh)
-    Vt, Ft, _ = resolve_mesh(target_mesh)
+    Vs, Fs, what_s = resolve_mesh(source_mesh)
+    Vt, Ft, what_t = resolve_mesh(target_mesh)
+    # the fit matches normals: either mesh inside out is fitted outward (the fields are per vertex)
+    Fs, Ft = wound_outward(Vs, Fs, what_s)[0], wound_outward(Vt, Ft, what_t)[0]
     for name, f in fields.items():
         if len(f) != len(Vs):
             raise AutobonesError(f"field {name!r} has {counted(len(f), 'row')}; the source mesh has {counted(len(Vs), 'vertex', 'vertices')}")
