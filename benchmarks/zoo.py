@@ -6,12 +6,14 @@
     python benchmarks/zoo.py --data /path/to/shared/data -j 2
 
 Heads: every mesh of ``../shared/data`` with a landmark file (``zoo/*``, menpo3d's james and template,
-ICT identities 000-002, the goat and the robot with ``tests/landmarks``' files) and the ``misc`` heads
-without landmarks (place-only checks). Variants: as is; 6 random rotations (seed 31); x0.001, x1000;
+ICT identities 000-002, the goat and the robot with ``tests/landmarks``' files), identity000 wearing five
+real ICT expressions (open jaw, smile, surprise, pucker, blink; ``zoo_expressive.py``) and the ``misc``
+heads without landmarks (place-only checks). Variants: as is; 6 random rotations (seed 31); x0.001, x1000;
 remeshed (Loop x1, decimated back to the triangle count); decimated to 5k vertices (larger heads only);
 one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin;
 every triangle wound inward (``flip``, normals into the head); the head's mirror image (``mirror``, x
-negated, written outward, left and right landmark names swapped). Landmarks follow the copy's rotation
+negated, written outward, left and right landmark names swapped); 12 holes of 0.03 head sizes cut away
+from the landmarks (``holes``). Landmarks follow the copy's rotation
 and scale (snapped to the surface on remeshed copies).
 
 Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
@@ -46,6 +48,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import zoo_checks as zc  # noqa: E402
+from zoo_expressive import EXPRESSIONS, IDENTITY, expressive_heads  # noqa: E402
 
 import autobones  # noqa: E402
 from autobones.errors import AutobonesError  # noqa: E402
@@ -67,9 +70,9 @@ FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in
                                            "robot_head_Surprised")},
 }
 HUMAN = {"human_man", "human_woman", "james", "template", "identity000", "identity001", "identity002",
-         "LeePerrySmith", "demosthenes-low-res", "fran_cut"}
+         "LeePerrySmith", "demosthenes-low-res", "fran_cut", *(f"{IDENTITY}_{e}" for e in EXPRESSIONS)}
 VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, zc.ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
-            "jitter", "flip", "mirror")
+            "jitter", "flip", "mirror", "holes")
 QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k", "flip", "mirror")
 COLUMNS = (("0 rig", 0), ("1 frame", 1), ("2 jaw", 2), ("3 neck P", 3), ("3 neck T", 3), ("4 pivot P", 4), ("4 pivot T", 4),
            ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("6 corr rot", 6), ("7 ARKit", 7), ("8 landmarks", 8))
@@ -93,6 +96,7 @@ def heads_in(data):
         mesh = ROOT / mesh if mesh.startswith("tests/data/") else data / mesh
         if mesh.exists():
             out[name] = (mesh, lm)
+    out.update(expressive_heads(data))   # ICT identity000 wearing real expressions (zoo_expressive.py)
     return out
 
 

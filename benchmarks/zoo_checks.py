@@ -95,6 +95,24 @@ def snapped(lm, V, F):
     return dict(zip(names, C))
 
 
+def _with_holes(name, V, F, lm, seed, count=12, radius=0.03):
+    """The copy of (V, F) with ``count`` disks of ``radius`` head sizes cut out of its surface, centred
+    on random vertices at least three radii from every landmark; unused vertices stay (core)."""
+    rng = np.random.default_rng(seed)
+    used = used_vertices(F, len(V))
+    r = radius * float(np.ptp(V[used], axis=0).max())
+    far = used
+    if lm:
+        d = np.min([np.linalg.norm(V[used] - p, axis=1) for p in lm.values()], axis=0)
+        far = used[d > 3 * r]
+    centres = V[rng.choice(far, size=min(count, len(far)), replace=False)]
+    C = V[F].mean(axis=1)
+    gone = np.zeros(len(F), dtype=bool)
+    for c in centres:
+        gone |= np.linalg.norm(C - c, axis=1) < r
+    return Variant(name, V, F[~gone], lm, lm, core=np.isin(np.arange(len(V)), F[~gone]))
+
+
 def make_variant(name, V, F, lm, seed):
     """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
     core = np.ones(len(V), dtype=bool)
@@ -116,6 +134,8 @@ def make_variant(name, V, F, lm, seed):
         M = np.diag([-1.0, 1.0, 1.0])
         tl = None if lm is None else {mirror_name(n): M @ p for n, p in lm.items()}
         return Variant(name, V @ M, F[:, ::-1].copy(), tl, tl, R=M, core=core)
+    if name == "holes":  # a scan's missing patches: 12 disks of 0.03 head sizes, away from the landmarks
+        return _with_holes(name, V, F, lm, seed)
     if name == "stray":
         size = float(np.ptp(V, axis=0).max())
         p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
