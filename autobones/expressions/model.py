@@ -51,6 +51,7 @@ import numpy as np
 
 from ..arguments import MAX_ANGLE, float_array, intensity_mixes, pose_angles, real
 from ..errors import AutobonesError, counted
+from ..geometry.winding import outward_faces
 from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
 from .definitions import load_expressions, model_parameters, muscle_types, parse_au_key
@@ -161,8 +162,10 @@ class ExpressionModel:
         inputs = rig_inputs(rig)
         frame = self.frame_ = rig.frame
         self.vertices_ = np.asarray(rig.vertices, dtype=np.float64)
-        F = np.asarray(rig.faces, dtype=np.int64)
         V = self.canonical_ = frame.to_canonical(self.vertices_)
+        # the skull lies under the skin along its normals: a rig of a head written inside out keeps the
+        # file's triangles (geometry.winding), so the model turns them outward for itself
+        F = outward_faces(V, rig.faces)[0]
         names = self.bones_ = list(rig.skeleton.names)
         self.pivots_ = frame.to_canonical(rig.skeleton.heads)
         W = np.asarray(rig.weights, dtype=np.float64)
