@@ -1,12 +1,12 @@
 """Which way a head's triangles face: wound consistently within each part and outward as a whole.
 
 Exporters write heads inside out (a negative scale baked into the file, a scan's inward normals:
-``fran_cut`` in the shared data), and the pipeline reads the winding in three places: the winding
-number that keeps joints inside the head, the normals the dense correspondence matches, and the
-rendered views the landmark detector reads. An inside-out copy of a head was rigged differently from
-the head (`benchmarks/zoo.py`'s ``flip`` copies: correspondence p95 5-130 % of the head's unit off,
-frames 32-160 degrees off). The pipeline works on :func:`outward_faces` and writes the user's own
-triangles back.
+``fran_cut`` in the shared data), and the pipeline reads the winding where it reads normals: the
+winding number that keeps joints inside the head, the dense correspondence's normal matching, the
+expression model's skull under the skin, the rendered views the landmark detector reads. An inside-out
+copy of a head was rigged differently from the head (``benchmarks/zoo.py``'s ``flip`` copies:
+``transfer``'s correspondence p95 5-131 % of ex-ex off on 19 of 22 heads, ``place``'s frame 32-154
+degrees off on three). The pipeline works on :func:`outward_faces`; the rigs keep the user's triangles.
 """
 import numpy as np
 

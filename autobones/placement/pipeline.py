@@ -19,6 +19,7 @@ from ..io.mesh import resolve_mesh, stray_parts, wound_outward
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
 from ..geometry.topology import used_vertices
+from ..geometry.winding import outward_faces
 from ..orient import Frame, detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -85,7 +86,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     body = stray_parts(V, F)
     if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
         return body.restore(place((body.V, body.F), density, up, front, random_state), source)
-    F_given, (F, turned) = F, wound_outward(V, F, source)   # rigged outward, written as given
+    F_given, (F, wound) = F, wound_outward(V, F, source)   # rigged outward, written as given
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
     C = frame.to_canonical(V)
@@ -113,8 +114,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     joints = seg.joints.to_dict()
     if note:
         joints["head"]["face_landmarks"] = note   # why a face mask's pivot is the nose rule's
-    if turned:
-        options["faces_turned"] = turned
+    if wound:
+        options["faces_turned"] = wound
     return Rig(vertices=V, faces=F_given, skeleton=skel_c.transformed(frame.from_canonical), weights=W,
                labels=seg.labels, facial_mask=seg.facial_mask, frame=frame, options=options,
                timings=timings, segmentation=seg, source=source, facial_bone_partner=model.partner_.tolist(),
@@ -181,7 +182,8 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
 
     base = transfer(mesh, landmarks, rig=rig, up=up, front=front)
     t = time.perf_counter()
-    V, F, frame = base.vertices, base.faces, base.frame
+    V, frame = base.vertices, base.frame
+    F = outward_faces(V, base.faces)[0]   # transfer keeps the file's triangles; the heat solve needs them outward
     C = frame.to_canonical(V)
     region = base.fields.get("region")
     names = base.field_labels.get("region", [])

@@ -237,7 +237,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
         return body.restore(transfer((body.V, body.F), landmarks, rig, up, front, control_points, details, arkit,
                                      symmetric, expression_fit, **fit_options), source)
-    F_given, (F, turned) = F, wound_outward(V, F, source)   # fitted outward, written as given
+    F_given, (F, wound) = F, wound_outward(V, F, source)   # fitted outward, written as given
     generic = load_generic(rig)
     lap("load")
     lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
@@ -283,7 +283,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
                "symmetric": symmetry.record_,
                "expression_fit": _expression_record(found_details, fit_details, expression_fit, space,
                                                     detected is not None),
-               **({"jaw": jaw_note} if jaw_note else {}), **({"faces_turned": turned} if turned else {})}
+               **({"jaw": jaw_note} if jaw_note else {}), **({"faces_turned": wound} if wound else {})}
     out = Rig(
         vertices=V, faces=F, skeleton=skeleton, weights=W, labels=labels, facial_mask=facial_mask,
         frame=frame, options=options, timings=timings, fields=fields,
