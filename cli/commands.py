@@ -33,7 +33,7 @@ def cmd_place(args):
     joints = (rig.other or {}).get("joints") or {}
     head = joints.get("head", {})
     if "no_neck" in joints.get("neck", {}).get("cues", []):
-        print("joints: no neck (a closed head ending at its chin): the whole head turns with the head bone and the "
+        print("joints: no neck (the mesh ends at its chin): the whole head turns with the head bone and the "
               "neck bone weighs nothing (sidecar joints.neck)")
     if "face_only" in head.get("cues", []):   # a mask's pivot is a guess from a face's proportions: say so
         how = ("from the face's automatic landmarks by a human's proportions" if "face_landmarks" in head["cues"]

@@ -143,3 +143,17 @@ def test_a_head_with_no_neck_turns_whole():
     assert "no_neck" not in cut.other["joints"]["neck"]["cues"]
     C = cut.frame.to_canonical(cut.vertices)
     assert cut.weights[C[:, 1] <= C[:, 1].min() + 0.02, cut.skeleton.names.index("neck")].min() > 0.999
+
+
+def test_a_face_mask_whose_chin_is_not_found_keeps_its_mouth_and_chin_in_the_face():
+    """fran_cut (a face strip, written with inward normals) has its chin's step at its lower edge, found
+    or missed by a degree of its frame; missed, the depth groups' split ran through the upper lip and
+    weighted the mouth and chin to the neck (0.29 of the face group left in the facial mask). A face
+    mask is never cut higher than its chin may lie: nothing is neck, and the lips and chin keep
+    facial bones."""
+    rig = autobones.place(data("misc/fran_cut.obj"), density="medium")
+    assert "no_neck" in rig.other["joints"]["neck"]["cues"]
+    assert rig.weights[:, rig.skeleton.names.index("neck")].max() < 1e-6
+    C = rig.frame.to_canonical(rig.vertices)
+    heads = rig.frame.to_canonical(rig.skeleton.heads[2:])
+    assert (heads[:, 1] < np.quantile(C[:, 1], 0.25)).sum() >= 3   # facial bones down on the lips and chin

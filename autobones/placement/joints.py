@@ -39,8 +39,8 @@ The neck joint (``neck`` cues): ``neck_section``, the neck's narrowest horizonta
 pivot (bounding width of an area-uniform sample, slab by slab), then ``shoulders``, where the
 sections below it widen ``SHOULDERS`` times (a bust's chest: the neck starts there, at C7), or
 ``bottom_cut``, the mesh's cut when the neck is cut off; ``no_neck`` (added by ``place``,
-:func:`autobones.placement.pipeline._no_neck`), a closed head whose chin is its lowest point: nothing
-below the face is held still. The menton (``menton_source``: ``chin``
+:func:`autobones.placement.pipeline._no_neck`), a closed head whose chin is its lowest point, or a
+head (a face mask) with nothing cut below its chin: nothing below the face is held still. The menton (``menton_source``: ``chin``
 from the profile, else ``proportions``, vertex-menton about 1.2 head lengths, Farkas 1994) is where
 the weights' head/neck boundary passes under the chin (:mod:`.locality`).
 

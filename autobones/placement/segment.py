@@ -144,8 +144,11 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     for h, is_chin in ((found, True), (neck_height, False)):
         # a cut that leaves less than a third of the facial group is no chin (cartoons, animals), nor
         # one above the nose tip: the depth groups' split of a head with no neck (Blender's Suzanne,
-        # whose muzzle is its most anterior point) ran through its eyes and left the muzzle as neck
-        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3 and (tip is None or h < tip[1]):
+        # whose muzzle is its most anterior point) ran through its eyes and left the muzzle as neck;
+        # nor, on a face mask, one higher than its chin may be (the split ran through fran_cut's upper
+        # lip when its chin step, at the mask's lower edge, was missed: its mouth and chin were neck)
+        if h is not None and (face_s[:, 1] >= h).mean() >= 1 / 3 and (tip is None or h < tip[1]) and (
+                is_chin or lowest is None or top - h >= lowest):
             cut, chin = h, (h if is_chin else None)
             break
     joints, head_bone, neck_bone = _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask, pivot)
