@@ -40,9 +40,9 @@ pivot (bounding width of an area-uniform sample, slab by slab), then ``shoulders
 sections below it widen ``SHOULDERS`` times (a bust's chest: the neck starts there, at C7), or
 ``bottom_cut``, the mesh's cut when the neck is cut off; ``no_neck`` (added by ``place``,
 :func:`autobones.placement.pipeline._no_neck`), a closed head whose chin is its lowest point, or a
-head (a face mask) with nothing cut below its chin: nothing below the face is held still. The menton (``menton_source``: ``chin``
-from the profile, else ``proportions``, vertex-menton about 1.2 head lengths, Farkas 1994) is where
-the weights' head/neck boundary passes under the chin (:mod:`.locality`).
+head (a face mask) with nothing cut below its chin: nothing below the face is held still. The menton
+(``menton_source``: ``chin`` from the profile, else ``proportions``, vertex-menton about 1.2 head
+lengths, Farkas 1994) is where the weights' head/neck boundary passes under the chin (:mod:`.locality`).
 
 The proportions were first measured on the SMPL man and woman heads of the zoo (hand-placed tragions,
 Chancey's offsets scaled by their ex-ex / 90 mm): the pivot 0.68-0.70 of the head's length below the

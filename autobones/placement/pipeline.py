@@ -102,8 +102,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap("face_landmarks")
     seg = segment_head(C, F, volume=coarse, pivot=pivot)
     if _no_neck(C, F, seg.joints, frame) or not seg.neck.any():
-        # nothing below the chin (a face mask whose chin step at its edge was not found: the depth split
-        # ran through fran_cut's upper lip) is weighted as neck either
+        # a head with nothing cut below its chin (a face mask whose chin step, at its edge, was missed)
+        # has no neck to weigh
         seg.joints.cues["neck"].append("no_neck")
     lap("segment")
     heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
