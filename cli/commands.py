@@ -32,8 +32,9 @@ def cmd_place(args):
           f"{time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, {os.path.basename(written[2])}")
     joints = (rig.other or {}).get("joints") or {}
     head = joints.get("head", {})
-    if "no_neck" in joints.get("neck", {}).get("cues", []):
-        print("joints: no neck (the mesh ends at its chin): the whole head turns with the head bone and the "
+    if "no_neck" in joints.get("neck", {}).get("cues", []) and "face_only" not in head.get("cues", []):
+        # a face mask's own line below says its neck has nothing to bend
+        print("joints: no neck (a closed head ending at its chin): the whole head turns with the head bone and the "
               "neck bone weighs nothing (sidecar joints.neck)")
     if "face_only" in head.get("cues", []):   # a mask's pivot is a guess from a face's proportions: say so
         how = ("from the face's automatic landmarks by a human's proportions" if "face_landmarks" in head["cues"]
