@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import autobones
+import zoo_checks as zc   # benchmarks/ is the script's folder, first on the path
 
 MODELS = Path("/usr/share/assimp/models")
 # name -> (model, cut axis, sign (the head's end), share of the extent kept from that end, true up, front)
@@ -51,10 +52,6 @@ def head_of(model, axis, sign, share, folder):
     return V[used], index[F]
 
 
-def angle(a, b):
-    return float(np.degrees(np.arccos(np.clip(np.dot(a, b), -1.0, 1.0))))
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rotations", type=int, default=6, help="random turns of each head (seed 31)")
@@ -72,7 +69,7 @@ def main(argv=None):
             for R in turns:
                 rig = autobones.place((V @ R.T, F), density="sparse")
                 got = rig.frame.rotation @ R      # the frame's up and front rows, back in the model's axes
-                offs.append((angle(got[1], up), angle(got[2], front)))
+                offs.append((zc.angle(got[1], up), zc.angle(got[2], front)))
             ok = all(max(o) <= 30 for o in offs)
             passed += ok
             worst = max(offs[1:], key=max)

@@ -9,7 +9,6 @@ it reads any head: the checks need no ground truth beyond those landmarks.
 from __future__ import annotations
 
 import json
-import os
 import tempfile
 import zlib
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from autobones.geometry.closest import closest_points
+from autobones.io.atomic import write_text_atomic
 from autobones.io.landmarks import read_landmarks
 from autobones.io.mesh import load_mesh
 
@@ -30,13 +30,6 @@ EXPRESSIONS = {
     "blink": {"eyeBlink_L": 1.0, "eyeBlink_R": 1.0},
 }
 IDENTITY = "identity000"
-
-
-def _write(path, text):
-    """Whole or not at all: an interrupted run leaves no half file the next would take as written."""
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def expressive_heads(data):
@@ -64,7 +57,7 @@ def expressive_heads(data):
             m, lmp = out[f"{IDENTITY}_{e}"]
             text = "".join(f"v {x:.9g} {y:.9g} {w:.9g}\n" for x, y, w in Ve)
             text += "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
-            _write(m, text)
-            _write(lmp, json.dumps({"format": "autobones-landmarks/1",
+            write_text_atomic(m, text)   # whole or not at all: a half file would pass for written next run
+            write_text_atomic(lmp, json.dumps({"format": "autobones-landmarks/1",
                                     "landmarks": {n: p.tolist() for n, p in zip(names, P)}}, indent=1))
     return out

@@ -83,10 +83,10 @@ def outward_faces(V, F):
         part = np.asarray(part).ravel()
         against = np.bincount(part, area * flip) > 0.5 * np.bincount(part, area)
         flip ^= against[part]
-    if outward_score(V, np.where(flip[:, None], F[:, ::-1], F) if flip.any() else F) < OUTWARD:
-        flip = ~flip
-    if not flip.any():
-        return F, 0
-    out = F.copy()
-    out[flip] = F[flip][:, ::-1]
-    return out, int(flip.sum())
+    G = F
+    if flip.any():
+        G = F.copy()
+        G[flip] = F[flip][:, ::-1]
+    if outward_score(V, G) < OUTWARD:
+        G, flip = G[:, ::-1], ~flip   # a turned triangle turned back is the file's own, corner for corner
+    return (F, 0) if not flip.any() else (np.ascontiguousarray(G), int(flip.sum()))
