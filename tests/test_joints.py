@@ -171,10 +171,12 @@ def test_face_mask_pivot_from_the_nose(monkeypatch):
 def test_face_mask_pivot_from_the_faces_landmarks():
     """ICT identity000 cut into a mask 0.5 ex-ex in front of its ear canals: narrower and pitched, its
     nose rule put the pivot 0.40 ex-ex from Chancey's centre; the generic rig's pivot placed by the
-    face's automatic landmarks (``face_landmarks``) 0.15."""
+    face's automatic landmarks (``face_landmarks``) 0.15; where human faces put it (``face_joints.json``,
+    which identity000 helped build: in sample) 0.055, with ICT's family held out of it 0.061
+    (``tools/calibrate_face_joints.py``)."""
     mesh, c1, ex = _mask_and_anatomy("ict/identity000", -0.5)
     rig = autobones.place(mesh)
     head = rig.sidecar()["joints"]["head"]
     assert "face_only" in head["cues"] and "face_landmarks" in head["cues"], head
     joint = rig.skeleton.heads[list(rig.skeleton.names).index("head")]
-    assert np.linalg.norm(joint - c1) < 0.2 * ex
+    assert np.linalg.norm(joint - c1) < 0.1 * ex

@@ -28,8 +28,9 @@ The head joint (``head`` cues):
   the neck lengthens the section, not the skull's base);
 - ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
   and no neck to measure: on a human face the pivot is the generic rig's, placed by the face's
-  automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.08-0.21 ex-ex
-  from Chancey's centre on the shared heads cut into masks where a face is found); else far behind
+  automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.04-0.25 ex-ex
+  from Chancey's centre on the shared heads cut into masks where a face is found, 0.10 mean, with the
+  head's family held out of the calibration); else far behind
   it, from the nose (``nose``: the midline profile's most anterior point, and the mask's width there
   as the scale, ``nose_width``: on James and the menpo template 0.191 / 0.173 ex-ex from Chancey's
   centre, most of it the mask's pitch in its frame times the 1.5 ex-ex lever; the mask's proportions

@@ -13,6 +13,9 @@ Both joints are midline ones (the generic's are, :mod:`autobones.rig_building.an
 """
 from __future__ import annotations
 
+import functools
+import os
+
 import numpy as np
 
 from ..geometry.head_share import face_only
@@ -33,10 +36,12 @@ JAW_CARRIED = ("menton", "pogonion", "labiale_inferius", "sublabiale")   # move 
 # warp places better (a human's proportions put a cat's head joint 0.84 ex-ex off, the warp 0.67). The
 # beast, a monster with a human face, measures 0.083 and takes a human's joints.
 HUMAN_FIT = 0.12
+FACE_JOINTS_FILE = "face_joints.json"   # in a rig's folder: where human faces put its joints
+FACE_JOINTS_FORMAT = "autobones-face-joints/1"
 
 
 def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, by_face=True,
-                  names=("head", "jaw")):
+                  names=("head", "jaw"), face_points=None):
     """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
     ear canals, or else to its human face, and onto the landmarks' midplane.
 
@@ -48,10 +53,11 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
     ex-ex from the anatomy on the SMPL heads. Without them, on a human face whose landmarks stop at
     the face (none of ``BACK_LANDMARKS``: the ears, the back and top of the head, the jaw's angles; at
     least ``MIN_FACE`` shared with the generic; the similarity's RMS residual within ``HUMAN_FIT``
-    ex-ex), each joint is the generic's mapped by the landmarks' similarity (fitted on the names the
-    jaw does not carry): 0.09-0.22 ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on
-    those heads, whole or cut into masks (the beast, a sculpted monster whose face's landmarks fit a
-    human's, 0.08, gets its jaw 0.21 from the condyle, the warp's 0.07). Either way, with at least
+    ex-ex), each joint is the generic's, or where human faces put it (``face_points``), mapped by the
+    landmarks' similarity (fitted on the names the jaw does not carry): the generic's own 0.09-0.22
+    ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on those heads, whole or cut into
+    masks (the beast, a sculpted monster whose face's landmarks fit a human's, 0.08, gets its jaw 0.21
+    from the condyle, the warp's 0.07; 0.17 by ``face_points``). Either way, with at least
     ``MIN_PAIRS`` left/right pairs, each joint then goes onto the landmarks' midplane
     (``landmarks.refine.symmetry_plane``):
     the similarity's small roll and asymmetric tragions put them 0.02-0.04 ex-ex beside it on the
@@ -82,6 +88,12 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
         (the SMPL heads and Lee Perry-Smith: warp 0.14-0.17, similarity 0.10-0.14).
     names : tuple of str
         Joints to place.
+    face_points : dict str -> (3,) float, optional
+        Where human faces put these joints against ``source`` (the generic's frame;
+        :func:`face_points`), mapped instead of the generic's
+        own joints when the face places them: the generic's, mapped by hand-placed face landmarks,
+        sat 0.09-0.22 ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on the shared
+        human heads; calibrated on the heads of the other source families, 0.06-0.21 and 0.03-0.17.
 
     Returns
     -------
@@ -108,7 +120,10 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
     size = float(np.ptp(V, axis=0).max())
     for name in (n for n in names if n in bones and n in gbones):
         i = bones.index(name)
-        want = heads[i] if mapped is None else mapped(generic.skeleton.heads[gbones.index(name)])
+        at = generic.skeleton.heads[gbones.index(name)]
+        if from_face is not None and face_points is not None and name in face_points:
+            at = face_points[name]
+        want = heads[i] if mapped is None else mapped(at)
         if plane is not None:
             want = onto_plane(want, *plane)
         p = want if face_mask else _inside_toward(V, F, want, heads[i])
@@ -127,8 +142,19 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
 def face_similarity(G, landmarks):
     """A map from a generic joint (3,) (the generic's frame) to where it goes on a human face by the
     landmarks' similarity (Umeyama 1991) from the generic's ``G`` (dict str -> (3,)) to ``landmarks``
-    (dict str -> (3,), the head's frame), or None: landmarks behind the face, fewer than ``MIN_FACE``
-    shared, or a face no similarity of the generic's fits (an animal's, a cartoon's).
+    (dict str -> (3,), the head's frame), or None: see :func:`face_fit`."""
+    fit = face_fit(G, landmarks)
+    if fit is None:
+        return None
+    s, R, p0, q0 = fit
+    return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
+
+
+def face_fit(G, landmarks):
+    """The similarity ``x -> q0 + s R (x - p0)`` (scale, (3, 3), (3,), (3,)) from the generic's
+    landmarks ``G`` (dict str -> (3,)) to a human face's ``landmarks`` (dict str -> (3,), the head's
+    frame), or None: landmarks behind the face, fewer than ``MIN_FACE`` shared, or a face no
+    similarity of the generic's fits (an animal's, a cartoon's).
 
     The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
     animals' so); the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
@@ -155,7 +181,7 @@ def face_similarity(G, landmarks):
     upper = [n for n in shared if n not in JAW_CARRIED]
     if len(upper) >= MIN_FACE:
         s, R, p0, q0, _ = fit(upper)
-    return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
+    return s, R, p0, q0
 
 
 def _from_the_ears(G, landmarks):
@@ -188,3 +214,28 @@ def _inside_toward(V, F, p, anchor, steps=20):
                                 np.ascontiguousarray(Q))
     inside = np.flatnonzero(w > min(0.5, w[-1] - 1e-9))
     return Q[inside[0]] if len(inside) and inside[0] < steps else None
+
+
+def face_points(folder, kind="given"):
+    """Where human faces put the ``head`` and ``jaw`` joints against a generic rig's landmarks (dict str ->
+    (3,), the generic's frame), or None: ``face_joints.json`` in the rig's ``folder`` (the built-in rig's
+    from ``tools/calibrate_face_joints.py``; a rig of one's own has none, and its own joints are mapped;
+    ``folder`` None, a rig given as an object, likewise). ``kind``: ``"detected"`` against the detector's
+    landmarks of the generic skin (``place`` on a face mask), ``"given"`` against its contract landmarks
+    (``transfer`` with a face's landmark file)."""
+    path = None if folder is None else os.path.join(folder, FACE_JOINTS_FILE)
+    if path is None or not os.path.isfile(path):
+        return None
+    return _face_points_in_file(path, os.stat(path).st_mtime_ns).get(kind) or None
+
+
+@functools.lru_cache(maxsize=4)
+def _face_points_in_file(path, mtime_ns):
+    # a pure function of the file (its time stamp in the key); read-only for its callers
+    from ..io.files import read_json
+
+    data = read_json(path, "rig", "rig folder's face_joints.json", "not readable face joints JSON")
+    if not isinstance(data, dict) or data.get("format") != FACE_JOINTS_FORMAT:
+        return {}
+    return {kind: {n: np.asarray(p, dtype=np.float64) for n, p in data.get(kind, {}).items()}
+            for kind in ("detected", "given")}
