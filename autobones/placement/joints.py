@@ -27,7 +27,7 @@ The head joint (``head`` cues):
   head, and at most ``PIVOT_BACK_WIDTH`` of the section's width (a snout or a jaw far in front of
   the neck lengthens the section, not the skull's base);
 - ``face_only``: an open shell facing forward (a face mask, orient's face-only capture) has no back
-  and no neck to measure: on a human face the pivot is the generic rig's, placed by the face's
+  and no neck to measure: on a human face the pivot is where human faces put it, placed by the face's
   automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.04-0.25 ex-ex
   from Chancey's centre on the shared heads cut into masks where a face is found, 0.10 mean, with the
   head's family held out of the calibration); else far behind

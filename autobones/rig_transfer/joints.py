@@ -41,7 +41,7 @@ FACE_JOINTS_FORMAT = "autobones-face-joints/1"
 
 
 def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, by_face=True,
-                  names=("head", "jaw"), face_points=None):
+                  names=("head", "jaw"), calibrated=None):
     """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
     ear canals, or else to its human face, and onto the landmarks' midplane.
 
@@ -53,11 +53,11 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
     ex-ex from the anatomy on the SMPL heads. Without them, on a human face whose landmarks stop at
     the face (none of ``BACK_LANDMARKS``: the ears, the back and top of the head, the jaw's angles; at
     least ``MIN_FACE`` shared with the generic; the similarity's RMS residual within ``HUMAN_FIT``
-    ex-ex), each joint is the generic's, or where human faces put it (``face_points``), mapped by the
+    ex-ex), each joint is the generic's, or where human faces put it (``calibrated``), mapped by the
     landmarks' similarity (fitted on the names the jaw does not carry): the generic's own 0.09-0.22
     ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on those heads, whole or cut into
     masks (the beast, a sculpted monster whose face's landmarks fit a human's, 0.08, gets its jaw 0.21
-    from the condyle, the warp's 0.07; 0.17 by ``face_points``). Either way, with at least
+    from the condyle, the warp's 0.07; 0.17 where faces put it). Either way, with at least
     ``MIN_PAIRS`` left/right pairs, each joint then goes onto the landmarks' midplane
     (``landmarks.refine.symmetry_plane``):
     the similarity's small roll and asymmetric tragions put them 0.02-0.04 ex-ex beside it on the
@@ -88,7 +88,7 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
         (the SMPL heads and Lee Perry-Smith: warp 0.14-0.17, similarity 0.10-0.14).
     names : tuple of str
         Joints to place.
-    face_points : dict str -> (3,) float, optional
+    calibrated : dict str -> (3,) float, optional
         Where human faces put these joints against ``source`` (the generic's frame;
         :func:`face_points`), mapped instead of the generic's
         own joints when the face places them: the generic's, mapped by hand-placed face landmarks,
@@ -121,8 +121,8 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
     for name in (n for n in names if n in bones and n in gbones):
         i = bones.index(name)
         at = generic.skeleton.heads[gbones.index(name)]
-        if from_face is not None and face_points is not None and name in face_points:
-            at = face_points[name]
+        if from_face is not None and calibrated is not None and name in calibrated:
+            at = calibrated[name]
         want = heads[i] if mapped is None else mapped(at)
         if plane is not None:
             want = onto_plane(want, *plane)

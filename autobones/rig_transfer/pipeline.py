@@ -263,7 +263,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("correspond")
 
     under, skeleton, placed = _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
-                                          by_face=detected is None, face_points=face_points(_rig_folder(rig), "given"))
+                                          by_face=detected is None, calibrated=face_points(_rig_folder(rig), "given"))
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -303,12 +303,12 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True, face_points=None):
+def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True, calibrated=None):
     """(under, skeleton, placed): the under-skin warp fitted on the correspondence ``P`` (n_rig, 3)
     where ``ok``, and the generic skeleton carried by it, its head and jaw then placed by the head's
     ears or face and its midplane (:func:`~.joints.anchor_joints`: ``placed`` says which; ``src`` and
     ``dst`` the shared landmarks on the generic and on the head; ``frame`` the head's, which tells a face
-    mask; ``by_face`` False for automatic landmarks; ``face_points`` where faces put the joints,
+    mask; ``by_face`` False for automatic landmarks; ``calibrated`` where faces put the joints,
     :func:`~.joints.face_points`)."""
     partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
@@ -318,7 +318,7 @@ def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
     # where the head has tragions they say where the joints are, else a human face's landmarks, and its
     # landmark pairs where its midplane is
     skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, frame=frame, by_face=by_face,
-                                     face_points=face_points)
+                                     calibrated=calibrated)
     return under, skeleton, placed
 
 
