@@ -159,7 +159,8 @@ def main(argv=None):
     kinds = {"detected": (generic_detected_landmarks(generic, None), lambda h: h["cuts"]),
              "given": ({n: np.asarray(p, dtype=np.float64) for n, p in generic.landmarks.items()},
                        lambda h: [("as is", h["given"])])}
-    out = {"format": FACE_JOINTS_FORMAT, "heads": sorted(heads), "families": sorted({h["family"] for h in heads.values()})}
+    out = {"format": FACE_JOINTS_FORMAT, "heads": sorted(heads),
+           "families": sorted({h["family"] for h in heads.values()})}
     for kind, (G, faces) in kinds.items():
         rows, errors, samples = compare(kind, G, own, heads, faces)
         report(kind, rows, errors, args.markdown)
