@@ -13,8 +13,9 @@ remeshed (Loop x1, decimated back to the triangle count); decimated to 5k vertic
 one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin;
 every triangle wound inward (``flip``, normals into the head); the head's mirror image (``mirror``, x
 negated, written outward, left and right landmark names swapped); 12 holes of 0.03 head sizes cut away
-from the landmarks (``holes``). Landmarks follow the copy's rotation
-and scale (snapped to the surface on remeshed copies).
+from the landmarks (``holes``); cut across the landmarks' front 0.3 ex-ex behind the ear canals (else in
+front of the opisthocranion: ``backcut``, a bust or trophy cut behind the ears, transfer given the landmarks
+left on it). Landmarks follow the copy's rotation and scale (snapped to the surface on remeshed copies).
 
 Checks (``zoo_checks.py``; "P" the ``place`` rig, "T" the ``transfer`` rig):
 1 frame: place's front / up within 30° of the landmarks'; rotated and scaled copies' frames mapped back
@@ -72,7 +73,7 @@ FIXED = {  # heads outside zoo/: name -> (mesh, landmarks or None); landmarks in
 HUMAN = {"human_man", "human_woman", "james", "template", "identity000", "identity001", "identity002",
          "LeePerrySmith", "demosthenes-low-res", "fran_cut", *(f"{IDENTITY}_{e}" for e in EXPRESSIONS)}
 VARIANTS = ("as-is", *(f"rot{k}" for k in range(1, zc.ROTATIONS + 1)), "x0.001", "x1000", "remesh", "dec5k", "stray",
-            "jitter", "flip", "mirror", "holes")
+            "jitter", "flip", "mirror", "holes", "backcut")
 QUICK = ("as-is", "rot1", "rot2", "x1000", "dec5k", "flip", "mirror")
 COLUMNS = (("0 rig", 0), ("1 frame", 1), ("2 jaw", 2), ("3 neck P", 3), ("3 neck T", 3), ("4 pivot P", 4), ("4 pivot T", 4),
            ("5 weights", 5), ("5 glTF", 5), ("6 corr", 6), ("6 corr rot", 6), ("7 ARKit", 7), ("8 landmarks", 8))

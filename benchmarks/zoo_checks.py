@@ -113,6 +113,24 @@ def _with_holes(name, V, F, lm, seed, count=12, radius=0.03):
     return Variant(name, V, F[~gone], lm, lm, core=np.isin(np.arange(len(V)), F[~gone]))
 
 
+def _cut_behind_ears(name, V, F, lm, behind=0.3):
+    """The copy of (V, F) cut by a plane across the landmarks' front ``behind`` ex-ex behind the tragions'
+    midpoint (else that far in front of the opisthocranion): a bust or trophy cut behind the ears, an
+    animal's head cut across a level neck. Transfer is given the landmarks still on the surface (within
+    0.02 ex-ex); None without landmarks to place the cut."""
+    ref = landmark_frame(V, F, lm) if lm else None
+    if ref is None or not ("tragion_l" in lm and "tragion_r" in lm or "opisthocranion" in lm):
+        return None
+    u = unit(lm, V)
+    at = 0.5 * (lm["tragion_l"] + lm["tragion_r"]) - behind * u * ref["front"] if "tragion_l" in lm and \
+        "tragion_r" in lm else lm["opisthocranion"] + behind * u * ref["front"]
+    Vc, Fc = compact(V, F[((V - at) @ ref["front"] > 0)[F].all(axis=1)])
+    names = list(lm)
+    C = closest_points(np.array([lm[n] for n in names]), Vc, Fc)[0]
+    kept = {n: lm[n] for n, c in zip(names, C) if np.linalg.norm(c - lm[n]) <= 0.02 * u}
+    return Variant(name, Vc, Fc, kept, lm, core=np.ones(len(Vc), dtype=bool))
+
+
 def make_variant(name, V, F, lm, seed):
     """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
     core = np.ones(len(V), dtype=bool)
@@ -136,6 +154,8 @@ def make_variant(name, V, F, lm, seed):
         return Variant(name, V @ M, F[:, ::-1].copy(), tl, tl, R=M, core=core)
     if name == "holes":  # a scan's missing patches: 12 disks of 0.03 head sizes, away from the landmarks
         return _with_holes(name, V, F, lm, seed)
+    if name == "backcut":  # cut across the face's front behind the ears (a bust's or a trophy's cut)
+        return _cut_behind_ears(name, V, F, lm)
     if name == "stray":
         size = float(np.ptp(V, axis=0).max())
         p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
