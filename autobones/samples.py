@@ -69,8 +69,8 @@ def write_samples(folder, force=False):
 
     ``folder`` is created when missing (its parent must exist). An existing folder that holds
     anything is refused unless ``force`` (then the sample files in it are replaced, other files
-    kept). The files are written into a temporary folder beside it first, so a failure leaves
-    nothing half-written.
+    kept). The files are written into a temporary folder first (beside a new folder, inside an existing
+    one), so a failure leaves nothing half-written.
     """
     shown = os.fspath(folder)  # as the user wrote it, in messages
     folder = Path(shown)
@@ -79,24 +79,25 @@ def write_samples(folder, force=False):
         raise AutobonesError(f"{shown}: exists and is not a folder; choose a new or empty folder")
     if not parent.is_dir():
         raise AutobonesError(f"{shown}: the folder {parent} does not exist; create it first")
-    full = folder.is_dir() and any(folder.iterdir())
-    if full and not force:
+    existing = folder.is_dir()
+    if existing and any(folder.iterdir()) and not force:
         raise AutobonesError(f"{shown}: the folder is not empty; choose a new or empty folder, or add --force "
                              "to replace the sample files in it")
+    # staged beside a new folder, which then appears whole; inside an existing one (the folder the user
+    # is in, `samples .`, cannot be removed and replaced), whose files are then moved in one by one
+    where = folder if existing else parent
     try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}-", dir=parent))
+        staging = Path(tempfile.mkdtemp(prefix=f".{folder.resolve().name}-", dir=where))
     except OSError as exc:
-        raise AutobonesError(f"{shown}: cannot write in {parent} ({exc.strerror or exc})") from None
+        raise AutobonesError(f"{shown}: cannot write in {where} ({exc.strerror or exc})") from None
     try:
         for name in NAMES:
             (staging / name).write_bytes(sample_bytes(name))
         os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes its folder owner-only
-        if full:  # --force into a folder with other files: replace ours one by one, keep theirs
+        if existing:  # empty, or --force with other files: ours replaced one by one, theirs kept
             for name in NAMES:
                 os.replace(staging / name, folder / name)
-        else:  # new or empty: the whole folder appears at once
-            if folder.is_dir():
-                folder.rmdir()
+        else:
             os.replace(staging, folder)
     finally:
         shutil.rmtree(staging, ignore_errors=True)

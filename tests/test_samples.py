@@ -110,6 +110,22 @@ def test_bad_destinations_are_one_line_and_write_nothing(tmp_path, target, messa
     assert sorted(os.listdir(tmp_path)) == ["afile"]
 
 
+def test_the_empty_folder_the_user_is_in(tmp_path):
+    """`autobones samples .` in a new empty folder (it cannot be removed and replaced: it was a traceback)."""
+    r = run(["samples", "."], tmp_path)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    from autobones.samples import NAMES
+
+    assert sorted(os.listdir(tmp_path)) == sorted(NAMES)
+    assert (tmp_path / "default_head.obj").stat().st_mode & 0o777 == 0o666 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def test_a_failure_half_way_leaves_no_folder(tmp_path, monkeypatch):
     from autobones import samples
 
@@ -125,6 +141,11 @@ def test_a_failure_half_way_leaves_no_folder(tmp_path, monkeypatch):
     with pytest.raises(OSError):
         samples.write_samples(tmp_path / "s")
     assert os.listdir(tmp_path) == []  # neither the folder nor the staging folder
+    (tmp_path / "s").mkdir()   # an existing empty folder: staged inside it, still nothing left
+    calls.clear()
+    with pytest.raises(OSError):
+        samples.write_samples(tmp_path / "s")
+    assert os.listdir(tmp_path / "s") == []
 
 
 def test_path_gives_a_written_sample_and_refuses_unknown_names():
