@@ -463,7 +463,9 @@ def test_help_and_summary_table():
 
 
 def test_find_meshes_walks_recursively_and_skips_hidden(tmp_path):
-    for rel in ("a.obj", "s/b.PLY", "s/t/c.glb", ".h.obj", ".d/e.obj", "s/readme.md", "s/f.obj.bak"):
+    # a.rig.glb and its sidecar: a rig `place` wrote beside its head, not a head to rig
+    for rel in ("a.obj", "s/b.PLY", "s/t/c.glb", ".h.obj", ".d/e.obj", "s/readme.md", "s/f.obj.bak", "a.rig.glb",
+                "a.rig.json"):
         p = tmp_path / rel
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_bytes(b"x")

@@ -50,9 +50,12 @@ def find_meshes(input_dir, output_dir=None):
     """Mesh files under ``input_dir``, recursively, sorted by relative path.
 
     Only :data:`autobones.io.mesh.SUPPORTED` extensions; hidden files and folders
-    (a leading dot) and ``output_dir`` (should it sit inside) are left out; symbolic
-    links to folders are not followed.
+    (a leading dot), ``output_dir`` (should it sit inside) and rigs autobones wrote (a
+    ``.glb`` with its ``.rig.json`` beside it: ``place`` run in the folder before) are left
+    out; symbolic links to folders are not followed.
     """
+    from ..rig import sidecar_paths
+
     inp = os.path.realpath(os.fspath(input_dir))
     skip = os.path.realpath(os.fspath(output_dir)) if output_dir is not None else None
     found = []
@@ -63,7 +66,7 @@ def find_meshes(input_dir, output_dir=None):
             if name.startswith(".") or os.path.splitext(name)[1].lower() not in SUPPORTED:
                 continue
             path = os.path.join(root, name)
-            if os.path.isfile(path):
+            if os.path.isfile(path) and not (name.lower().endswith(".glb") and os.path.isfile(sidecar_paths(path)[0])):
                 found.append(path)
     return sorted(found, key=lambda p: os.path.relpath(p, inp).replace(os.sep, "/"))
 
