@@ -242,8 +242,12 @@ def test_a_row_of_lashes_turns_as_one_piece(model):
 def test_the_mouth_inside_follows_icts_own_jaw(model):
     """ICT's jawOpen turns its lower teeth, gums and tongue about a centre below and behind the
     condyle and leaves the pharynx still: the model's jaw at ICT's 25 degrees reproduces the
-    mouth's inner parts to >= 88 % (90.3 %; with the gums-and-tongue part split at the stomion and
-    the pharynx turned with the jaw: 83 %), and nothing behind the jaw joint's blend moves."""
+    mouth's inner parts to >= 80 %, and nothing behind the jaw joint's blend moves. With the jaw joint
+    at the condyle (issue #32) and the definitions' glide: 83.6 % on this face-only landmark file, the
+    joint where human faces put it (``face_joints.json``); 80.8 % with the tragions given, the joint
+    from the ear canals. The generic's own jaw mapped by the face's similarity, 0.15 ex-ex off the
+    condyle, happened to turn these parts closer to ICT's centre: 90.3 % (with the gums-and-tongue part
+    split at the stomion and the pharynx turned with the jaw: 83 %)."""
     rig, m = model("ict")
     from autobones.io.mesh import load_mesh
 
@@ -253,7 +257,7 @@ def test_the_mouth_inside_follows_icts_own_jaw(model):
     rows = m.mouth_parts_
     D = X[rows] - rig.vertices[rows]
     explained = 1.0 - np.linalg.norm(V[rows] - X[rows]) / np.linalg.norm(D)
-    assert explained >= 0.88, explained
+    assert explained >= 0.8, explained
     j = m.bones_.index("jaw")
     reach = float(m.doc_["model"]["mouth_parts"]["pharynx"]) * m.face_unit_   # the hold's blend
     behind = rows[m.canonical_[rows, 2] < m.pivots_[j][2] - reach]
