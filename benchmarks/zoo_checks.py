@@ -119,11 +119,14 @@ def _cut_behind_ears(name, V, F, lm, behind=0.3):
     animal's head cut across a level neck. Transfer is given the landmarks still on the surface (within
     0.02 ex-ex); None without landmarks to place the cut."""
     ref = landmark_frame(V, F, lm) if lm else None
-    if ref is None or not ("tragion_l" in lm and "tragion_r" in lm or "opisthocranion" in lm):
+    ears = bool(lm) and "tragion_l" in lm and "tragion_r" in lm
+    if ref is None or not (ears or "opisthocranion" in lm):
         return None
     u = unit(lm, V)
-    at = 0.5 * (lm["tragion_l"] + lm["tragion_r"]) - behind * u * ref["front"] if "tragion_l" in lm and \
-        "tragion_r" in lm else lm["opisthocranion"] + behind * u * ref["front"]
+    if ears:
+        at = 0.5 * (lm["tragion_l"] + lm["tragion_r"]) - behind * u * ref["front"]
+    else:
+        at = lm["opisthocranion"] + behind * u * ref["front"]
     Vc, Fc = compact(V, F[((V - at) @ ref["front"] > 0)[F].all(axis=1)])
     names = list(lm)
     C = closest_points(np.array([lm[n] for n in names]), Vc, Fc)[0]

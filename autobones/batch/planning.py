@@ -66,7 +66,8 @@ def find_meshes(input_dir, output_dir=None):
             if name.startswith(".") or os.path.splitext(name)[1].lower() not in SUPPORTED:
                 continue
             path = os.path.join(root, name)
-            if os.path.isfile(path) and not (name.lower().endswith(".glb") and os.path.isfile(sidecar_paths(path)[0])):
+            ours = name.lower().endswith(".glb") and os.path.isfile(sidecar_paths(path)[0])  # a rig, not a head
+            if os.path.isfile(path) and not ours:
                 found.append(path)
     return sorted(found, key=lambda p: os.path.relpath(p, inp).replace(os.sep, "/"))
 
