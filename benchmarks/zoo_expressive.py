@@ -59,5 +59,5 @@ def expressive_heads(data):
             text += "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
             write_text_atomic(m, text)   # whole or not at all: a half file would pass for written next run
             write_text_atomic(lmp, json.dumps({"format": "autobones-landmarks/1",
-                                    "landmarks": {n: p.tolist() for n, p in zip(names, P)}}, indent=1))
+                                               "landmarks": {n: p.tolist() for n, p in zip(names, P)}}, indent=1))
     return out

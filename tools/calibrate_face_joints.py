@@ -89,13 +89,10 @@ def calibrated(samples, G):
 
 def placed(G, face, point):
     """``point`` (3,) of the generic's frame mapped onto a face by its landmarks, on their midplane."""
-    from autobones.geometry.mirror_plane import onto_plane
-    from autobones.landmarks.refine import symmetry_plane
-    from autobones.rig_transfer.joints import face_similarity
+    from autobones.rig_transfer.joints import onto_face
 
-    shared = {n: p for n, p in face.items() if n in G}
-    mapped = face_similarity(G, shared)
-    return None if mapped is None else onto_plane(mapped(point), *symmetry_plane(shared))
+    on = onto_face(G, face, {"p": point})
+    return None if on is None else on["p"]
 
 
 def compare(kind, G, own, heads, faces):

@@ -7,7 +7,7 @@ ears) has no back of the head and no neck to measure; ``place``'s rule from its 
 head pivot 0.12-0.65 ex-ex from the occiput-C1 centre on the shared human heads cut 0.3 ex-ex behind their
 ear canals and 0.38-1.12 on them cut 0.5 in front (``benchmarks/joints.py`` ``mask-behind`` / ``mask-front``).
 On a human face the detector finds the face's landmarks whatever the cut, and the generic rig's joints go
-where the landmarks' similarity maps them (:func:`.joints.face_similarity`, the detector's own landmarks of
+where the landmarks' similarity maps them (:func:`.joints.onto_face`, the detector's own landmarks of
 the generic skin on the other side), then onto the landmarks' midplane: 0.09-0.21 on the masks cut behind,
 0.13-0.18 on those cut in front where a face is found. The biases did not cancel: the generic's own head
 joint mapped so sat above Chancey's centre on all eight shared human heads (0.01-0.16 ex-ex), so the head
@@ -19,12 +19,9 @@ mesh's own frame and units.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ..errors import AutobonesError
 from ..generic_rig import default_rig_path
-from ..geometry.mirror_plane import onto_plane
-from .joints import face_points, face_similarity
+from .joints import face_points, onto_face
 from .pipeline import generic_detected_landmarks, load_generic
 
 
@@ -49,7 +46,6 @@ def face_joints(V, F, frame=None, names=("head",)):
     """
     from ..landmarks.detect import LandmarkDetector
     from ..landmarks.mediapipe import MediaPipeFaceMesh
-    from ..landmarks.refine import symmetry_plane
 
     if not MediaPipeFaceMesh.installed():   # asked before rendering the views it would read
         return None, f"no face detector installed ({MediaPipeFaceMesh.INSTALL})"
@@ -61,12 +57,7 @@ def face_joints(V, F, frame=None, names=("head",)):
     source = generic_detected_landmarks(generic, None)
     if source is None:
         return None, "the generic rig's own landmarks were not found"
-    shared = {n: np.asarray(p, dtype=np.float64) for n, p in found.items() if n in source}
-    mapped = face_similarity(source, shared)
-    if mapped is None:
-        return None, "the landmarks found fit no human face"
-    plane = symmetry_plane(shared)
     bones = list(generic.skeleton.names)
     calibrated = face_points(default_rig_path(), "detected") or {}
-    at = lambda name: calibrated.get(name, generic.skeleton.heads[bones.index(name)])  # noqa: E731
-    return {name: onto_plane(mapped(at(name)), *plane) for name in names}, None
+    joints = onto_face(source, found, {n: calibrated.get(n, generic.skeleton.heads[bones.index(n)]) for n in names})
+    return (None, "the landmarks found fit no human face") if joints is None else (joints, None)

@@ -150,6 +150,21 @@ def face_similarity(G, landmarks):
     return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
 
 
+def onto_face(G, landmarks, points):
+    """``points`` (dict str -> (3,), the generic's frame) mapped onto a human face by the similarity of
+    the generic's landmarks ``G`` to the face's ``landmarks`` (both dict str -> (3,)), then onto the
+    landmarks' midplane (``landmarks.refine.symmetry_plane``); None where no similarity fits
+    (:func:`face_fit`)."""
+    from ..landmarks.refine import symmetry_plane
+
+    shared = {n: np.asarray(p, dtype=np.float64) for n, p in landmarks.items() if n in G}
+    mapped = face_similarity(G, shared)
+    if mapped is None:
+        return None
+    plane = symmetry_plane(shared)
+    return {k: onto_plane(mapped(p), *plane) for k, p in points.items()}
+
+
 def face_fit(G, landmarks):
     """The similarity ``x -> q0 + s R (x - p0)`` (scale, (3, 3), (3,), (3,)) from the generic's
     landmarks ``G`` (dict str -> (3,)) to a human face's ``landmarks`` (dict str -> (3,), the head's
