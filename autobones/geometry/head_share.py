@@ -14,7 +14,9 @@ lips turn with the head and the throat stays with the neck. The neck base is pur
 is 0 up to the higher of the lowest ``NECK_BASE`` of the vertices and ``NECK_BASE`` of the mesh's
 height (and near a planar neck cut, which an animal's slanted neck lifts above the lowest heights),
 rising over the next ``NECK_RISE`` of the way to the joint. The face and its band keep the whole
-share wherever they hang (a long muzzle below any boundary through the pivot).
+share wherever they hang (a long muzzle below any boundary through the pivot), down to the chin: where
+the lowest ``NECK_BASE`` of the vertices reach above the chin (a face far denser than its neck, a neck
+cut close under the chin) the face's share rises from under the chin, not from that base.
 
 :func:`apply_head_share` then moves weight between the neck and the rest so each row's head side
 sums to the share: the neck gets ``1 - share``; the head and its children keep their weights where
@@ -75,7 +77,7 @@ def mask_distance(C, mask, bound):
 
 
 def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
-               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False):
+               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False, chin_base=False):
     """The head's share of each vertex (module docstring): (n,) in [0, 1].
 
     Parameters
@@ -111,8 +113,14 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         The face keeps its share down to the chin (``chin``'s height, fading over ``CHIN_MARGIN``
         below it) even inside the neck base: a measured menton (``transfer``'s landmark) is on the
         jaw, whose weight must stay there, while the lowest ``neck_base`` of the vertices of a face
-        far denser than its neck reach above it (ICT: 0.03 head sizes). ``place``'s estimated
-        menton does not hold the neck base back.
+        far denser than its neck reach above it (ICT: 0.03 head sizes).
+    chin_base : bool
+        The face's share rises from under the chin (``chin``'s height less ``CHIN_MARGIN``, or the
+        neck base when that is lower) to whole at the chin, never inside the lowest ``neck_base`` of
+        the height or of the height above a planar ``cut``: ``place``'s estimated menton (0.01-0.04
+        head sizes under the landmarked one on the shared human heads; on some animals the step of
+        the throat into the neck, 0.16-0.43 under the chin: the ogre, the chess knight), which
+        unlike a measured one does not hold the face's share up inside those bases.
     """
     C = np.asarray(C, dtype=np.float64)
     y, z = C[:, 1], C[:, 2]
@@ -125,15 +133,29 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
     boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
-    rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12))
+    slant = np.ones_like(y)
     if cut is not None and not face_only:
         centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
         above = (C - centre) @ -normal
         top = float((np.asarray(joint, dtype=np.float64) - centre) @ -normal)
         low = neck_base * float(np.ptp(used))
         if top > low:
-            rise = rise * smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
+            slant = smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
+    rise = _rise(y, base, yj, neck_rise) * slant
     share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
+    if face is not None and chin_base and chin is not None and not face_only:
+        # the face's own base stops under the chin and its share is whole at the chin: the lowest share
+        # of the vertices reaches above the chin on a face far denser than its neck (ICT: 0.04 head
+        # sizes) or a neck cut close under it, and there, or rising over the neck's height, the chin
+        # stayed behind on a head turn (share 0.0-0.6 on ICT's and the SMPL bodies' mentons). The
+        # lowest share of the height, and of the height above a planar cut, stay still
+        lowest = min(float(used.min()) + neck_base * float(np.ptp(used)), yj - 1e-6)
+        b0 = max(lowest, min(base, chin[0] - CHIN_MARGIN))
+        rise = smoothstep((y - b0) / max(chin[0] - b0, CHIN_MARGIN / 4))
+        if cut is not None and top > low:
+            chin_above = float((np.array([0.0, chin[0], chin[1]]) - centre) @ -normal)
+            l0 = max(0.0, min(low, chin_above - CHIN_MARGIN))
+            rise = rise * smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
     if face is not None:
         # a face-only mesh's lowest vertices are its chin, which turns with the head, unless a neck
         # hangs below the chin (James' scan runs 0.18 of its height further down: its face's band
@@ -144,6 +166,12 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
             rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
         share = np.maximum(share, face if whole else face * rise)
     return share
+
+
+def _rise(y, base, joint, neck_rise):
+    """(n,) 0 at and below ``base``, rising smoothly to 1 over ``neck_rise`` of the way to the ``joint``'s
+    height (heights ``y`` (n,), head sizes)."""
+    return smoothstep((y - base) / max(neck_rise * (joint - base), 1e-12))
 
 
 def smooth_share(share, C, F, rings=SMOOTH_RINGS, weld_tol=1e-6):

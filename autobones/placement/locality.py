@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.head_share import apply_head_share, head_share, mask_distance
+from ..geometry.head_share import apply_head_share, head_share, mask_distance, smooth_share
 from ..geometry.smooth import smoothstep
 from ..geometry.weights import prune_weights
 
@@ -39,7 +39,7 @@ CHUNK = 65536
 
 
 def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, faces=None, band=FACIAL_BAND,
-                     chin=None, face_only=False, prune=0.01, cut=None, no_neck=False):
+                     chin=None, face_only=False, prune=0.01, cut=None, no_neck=False, chin_base=False):
     """Restrict bone-heat weights to stay local (module docstring); in place, and returned.
 
     Parameters
@@ -61,7 +61,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
         stray loose vertex does not move the neck base).
     band : float
         Blend band around the facial mask, head sizes.
-    chin, face_only, cut
+    chin, face_only, cut, chin_base
         The boundary's and the neck base's options, see
         :func:`autobones.geometry.head_share.head_share`.
     prune : float
@@ -99,7 +99,11 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
     # 2. the head's share (head and facial bones) from the boundary through the pivot, and all of the
     # face and its band (a long muzzle hangs below any plane through the pivot); the rest is neck
     share = np.ones(n) if no_neck else head_share(C, joint, faces=faces, chin=chin, face_only=face_only,
-                                                  face=hold, cut=cut)
+                                                  face=hold, cut=cut, chin_base=chin_base)
+    if faces is not None and not no_neck:
+        # the bands are head sizes: on a coarse neck one spans a single long edge, a step of the whole
+        # head/neck split across it (as transfer's rigs, :mod:`autobones.rig_transfer.neck`)
+        share = smooth_share(share, C, faces)
     apply_head_share(W, share, neck=neck, head=head)
 
     np.clip(W, 0.0, None, out=W)

@@ -162,7 +162,8 @@ def _local_weights(C, F, skel_c, proxy, seg, frame):
     joints = seg.joints
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
                      chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"],
-                     cut=frame.cut, no_neck="no_neck" in joints.cues["neck"])
+                     cut=frame.cut, no_neck="no_neck" in joints.cues["neck"],
+                     chin_base=joints.menton_source == "chin")
     return W
 
 
