@@ -21,8 +21,9 @@ the side with each name's detection confidence; ``landmarks_given_goat``: the sa
 preview of a landmark file placed by hand (no face detector works on a goat).
 
 ``place_head_turn``: the head bone of a dense ``place`` rig turned 15 degrees (linear blend
-skinning) on the default head and on a bust, the skin tinted orange by how far each vertex moved
-(relative to the largest motion): the face and skull turn as one, the neck twists, its base stays.
+skinning) on the default head, a bust, ICT's identity000 and the SMPL woman, the skin tinted orange
+by how far each vertex moved (relative to the largest motion): the face and skull turn as one, the neck
+twists, its base stays.
 
 ``joints_side_views``: five heads from the left (the default head, ICT identity002, spot, the cow, the
 cat) with ``place``'s head and neck joints, ``transfer``'s head and jaw joints, and the occiput-C1 centre
@@ -291,7 +292,11 @@ def jaw_open_picture(out, degrees=20.0, size=380):
     print(f"{path}: {', '.join(JAW_HEADS)}, jaw closed and opened {degrees:g} degrees")
 
 
-TURN_HEADS = {"default head": None, "Lee Perry-Smith": "misc/LeePerrySmith.obj"}  # mesh under ../shared/data
+# mesh under ../shared/data; ICT's face is far denser than its neck (its lowest 5% of vertices reach above the
+# chin) and the SMPL woman's neck is cut close under her chin: both left their chins behind before the face's
+# share rose to the chin (geometry/head_share.py)
+TURN_HEADS = {"default head": None, "Lee Perry-Smith": "misc/LeePerrySmith.obj",
+              "ICT identity000": "ict/identity000.obj", "SMPL woman": "zoo/human_woman.obj"}
 
 
 def head_turn_picture(out, degrees=15.0, size=360):
