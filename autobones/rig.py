@@ -248,6 +248,9 @@ class Rig:
         shapes where the rig has them, else muscles. Unmapped AUs, muscles, jaw, eyelids, gaze,
         head/neck and tissue always use the muscle model.
 
+        A rig without muscles (``place``'s) poses ``head_deg`` and ``neck_deg`` alone, by its bones
+        (:meth:`turn_bones`); anything else raises AutobonesError.
+
         ``tissue=True``: the skin refined by the layered soft tissue's equilibrium (Lee,
         Terzopoulos & Waters 1995; :mod:`autobones.expressions.tissue`): skin over shortening
         muscles bulges, the tissue keeps its volume and stays off the skull.
@@ -284,11 +287,36 @@ class Rig:
                       and gaze is None and look_at is None and head_deg is None and neck_deg is None)
         if offset is not None and only_arkit:  # no model needed (a rig without muscles poses too)
             base = np.asarray(self.vertices, dtype=np.float64)
+        elif not self.muscles and self._only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
+            base = self.turn_bones(head_deg, neck_deg)   # a `place` rig: its bones, no skin/muscle model
         else:
             base = self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
                                                 eyelids=eyelids, gaze=gaze, look_at=look_at, head_deg=head_deg,
                                                 neck_deg=neck_deg, tissue=tissue)
         return base if offset is None else base + offset
+
+    @staticmethod
+    def _only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
+        """True when no control of :meth:`pose` but the head and neck turns is given."""
+        return (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
+                and gaze is None and look_at is None and not tissue)
+
+    def turn_bones(self, head_deg=None, neck_deg=None):
+        """Vertices (n, 3), input frame and units, with the ``head`` and ``neck`` bones turned by
+        (pitch, yaw, roll) degrees about +X, +Y, +Z of the head frame at their joints and every bone
+        under them carried along, by linear blend skinning with the rig's own weights (what a glTF
+        player does): how any rig, ``place``'s included, turns. All zero: the vertices, exactly."""
+        from .expressions.bones import blend_bones, bone_transforms
+
+        V = np.asarray(self.vertices, dtype=np.float64)
+        C = self.frame.to_canonical(V)
+        pivots = self.frame.to_canonical(np.asarray(self.skeleton.heads, dtype=np.float64))
+        moves = bone_transforms(list(self.skeleton.names), pivots, 0.0, None, None, head_deg, neck_deg,
+                                parents=list(self.skeleton.parents))
+        if not moves:
+            return V.copy()
+        d = blend_bones(np.zeros_like(C), C, np.asarray(self.weights, dtype=np.float64), moves)
+        return self.frame.from_canonical(C + d)
 
     def _expression_definitions(self):
         """The definitions ``pose`` uses: the built model's, else the sidecar's, else the packaged ones."""

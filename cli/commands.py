@@ -149,14 +149,17 @@ def cmd_pose(args):
     definitions = load_expressions(args.definitions) if args.definitions else None
     rig = autobones.load_rig(args.rig)
     watch.lap("read")
-    if not rig.muscles and not (arkit and rig.arkit_targets):
-        raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none); pose needs a rig "
-                             "saved by autobones transfer HEAD --landmarks FILE -o OUT.glb")
+    turns_only = (head_deg or neck_deg) and not (au or expression or muscles or eyelids or arkit or jaw or gaze
+                                                 or look_at or args.tissue or definitions is not None)
+    if not rig.muscles and not (arkit and rig.arkit_targets) and not turns_only:
+        raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none): it poses only "
+                             "--head and --neck; the rest needs a rig saved by autobones transfer HEAD --landmarks "
+                             "FILE -o OUT.glb")
     layer = resolve_layer(args.layer, bool(rig.arkit_targets))  # --layer shapes on a rig without: refused here
     # names checked before the skin/muscle model is built (seconds on a large head): a typo costs nothing
     check_pose_names(rig, definitions, expression, au, muscles, eyelids, arkit, shapes=layer == "shapes")
-    if definitions is not None or au or expression or muscles or eyelids or jaw or gaze or look_at or head_deg \
-            or neck_deg or args.tissue:
+    if rig.muscles and (definitions is not None or au or expression or muscles or eyelids or jaw or gaze or look_at
+                        or head_deg or neck_deg or args.tissue):
         with progress(args, "building the skin/muscle model"):
             rig.expression_model(definitions)  # pose uses the model built last
         watch.lap("model")

@@ -131,9 +131,11 @@ def add_pose(sub):
         "pose", help="pose a saved transferred rig: FACS action units, emotions, jaw, eyelids, gaze",
         description="Pose a rig saved by `autobones transfer` with its skin/muscle model (Bibliowicz 2005, "
                     "section 4.2): FACS action units, emotion presets, muscle contractions, jaw opening, "
-                    "eyelids, eye gaze, head and neck turns. Writes the posed mesh.",
+                    "eyelids, eye gaze, head and neck turns. Writes the posed mesh. A rig from `autobones "
+                    "place` has no muscles: it poses --head and --neck (its bones, by linear blend skinning).",
         epilog=pose_epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
-    q.add_argument("rig", metavar="RIG.glb", help="a glb written by autobones transfer, its sidecars beside it")
+    q.add_argument("rig", metavar="RIG.glb", help="a glb written by autobones transfer (or place: --head and --neck "
+                   "only), its sidecars beside it")
     q.add_argument("-o", "--output", help="posed mesh, .obj or .glb (default: RIG_NAME.pose.obj in the current folder)")
     q.add_argument("--expression", action="append", default=[], metavar="NAME[=W]",
                    help="an emotion preset at intensity W (default 1); repeat to mix")

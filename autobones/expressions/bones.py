@@ -77,7 +77,7 @@ def _eye_rotation(eye_pivot, base, look_at, gaze):
     return None
 
 
-def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg):
+def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, parents=None):
     """World transforms of the bones that move: bone index -> (R (3, 3), t (3,)), x -> R x + t.
 
     Parameters
@@ -94,6 +94,9 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg):
         Canonical point both eyes aim at (takes precedence over ``gaze``).
     head_deg, neck_deg : (pitch, yaw, roll) degrees or None
         About +X, +Y, +Z at the head / neck pivots.
+    parents : list of int, optional
+        Each bone's parent (-1 for a root): every other bone under the head (``place``'s facial
+        bones) then moves with the head, and under the neck alone with the neck.
 
     Raises AutobonesError when a control needs a bone the rig lacks.
     """
@@ -135,6 +138,11 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg):
             world[eye] = (base[0] @ Rl, base[0] @ tl + base[1])
         elif eye in names and "head" in world:
             world[eye] = base
+    if parents is not None:
+        # bones the controls above do not name ride on their nearest moving ancestor (parents come first)
+        for b, name in enumerate(names):
+            if name not in world and parents[b] >= 0 and names[parents[b]] in world:
+                world[name] = world[names[parents[b]]]
     return {names.index(name): T for name, T in world.items()}
 
 
