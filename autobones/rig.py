@@ -287,7 +287,7 @@ class Rig:
                       and gaze is None and look_at is None and head_deg is None and neck_deg is None)
         if offset is not None and only_arkit:  # no model needed (a rig without muscles poses too)
             base = np.asarray(self.vertices, dtype=np.float64)
-        elif not self.muscles and self._only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
+        elif not self.muscles and self.only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
             base = self.turn_bones(head_deg, neck_deg)   # a `place` rig: its bones, no skin/muscle model
         else:
             base = self.expression_model().pose(au=au, expression=expression, muscles=muscles, jaw_deg=jaw_deg,
@@ -296,8 +296,9 @@ class Rig:
         return base if offset is None else base + offset
 
     @staticmethod
-    def _only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
-        """True when no control of :meth:`pose` but the head and neck turns is given."""
+    def only_turns(au, expression, muscles, jaw_deg, eyelids, gaze, look_at, tissue):
+        """True when no control of :meth:`pose` but the head and neck turns is given: what a rig without
+        muscles can pose (:meth:`turn_bones`)."""
         return (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
                 and gaze is None and look_at is None and not tissue)
 

@@ -149,8 +149,8 @@ def cmd_pose(args):
     definitions = load_expressions(args.definitions) if args.definitions else None
     rig = autobones.load_rig(args.rig)
     watch.lap("read")
-    turns_only = (head_deg or neck_deg) and not (au or expression or muscles or eyelids or arkit or jaw or gaze
-                                                 or look_at or args.tissue or definitions is not None)
+    turns_only = (head_deg or neck_deg) and not arkit and definitions is None and rig.only_turns(
+        au or None, expression or None, muscles or None, jaw, eyelids or None, gaze, look_at, args.tissue)
     if not rig.muscles and not (arkit and rig.arkit_targets) and not turns_only:
         raise AutobonesError(f"{args.rig}: this rig has no muscles (`autobones place` makes none): it poses only "
                              "--head and --neck; the rest needs a rig saved by autobones transfer HEAD --landmarks "

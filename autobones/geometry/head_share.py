@@ -133,7 +133,8 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
     boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
-    slant = np.ones_like(y)
+    face_base = face is not None and chin_base and chin is not None and not face_only
+    slant = slant_face = np.ones_like(y)   # the share's and the face's rise above a planar cut
     if cut is not None and not face_only:
         centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
         above = (C - centre) @ -normal
@@ -141,9 +142,13 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         low = neck_base * float(np.ptp(used))
         if top > low:
             slant = smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
-    rise = _rise(y, base, yj, neck_rise) * slant
+            if face_base:   # whole at the chin (below), never inside the cut's own base
+                chin_above = float((np.array([0.0, chin[0], chin[1]]) - centre) @ -normal)
+                l0 = max(0.0, min(low, chin_above - CHIN_MARGIN))
+                slant_face = smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
+    rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12)) * slant
     share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
-    if face is not None and chin_base and chin is not None and not face_only:
+    if face_base:
         # the face's own base stops under the chin and its share is whole at the chin: the lowest share
         # of the vertices reaches above the chin on a face far denser than its neck (ICT: 0.04 head
         # sizes) or a neck cut close under it, and there, or rising over the neck's height, the chin
@@ -151,11 +156,7 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         # lowest share of the height, and of the height above a planar cut, stay still
         lowest = min(float(used.min()) + neck_base * float(np.ptp(used)), yj - 1e-6)
         b0 = max(lowest, min(base, chin[0] - CHIN_MARGIN))
-        rise = smoothstep((y - b0) / max(chin[0] - b0, CHIN_MARGIN / 4))
-        if cut is not None and top > low:
-            chin_above = float((np.array([0.0, chin[0], chin[1]]) - centre) @ -normal)
-            l0 = max(0.0, min(low, chin_above - CHIN_MARGIN))
-            rise = rise * smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
+        rise = smoothstep((y - b0) / max(chin[0] - b0, CHIN_MARGIN / 4)) * slant_face
     if face is not None:
         # a face-only mesh's lowest vertices are its chin, which turns with the head, unless a neck
         # hangs below the chin (James' scan runs 0.18 of its height further down: its face's band
@@ -166,12 +167,6 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
             rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
         share = np.maximum(share, face if whole else face * rise)
     return share
-
-
-def _rise(y, base, joint, neck_rise):
-    """(n,) 0 at and below ``base``, rising smoothly to 1 over ``neck_rise`` of the way to the ``joint``'s
-    height (heights ``y`` (n,), head sizes)."""
-    return smoothstep((y - base) / max(neck_rise * (joint - base), 1e-12))
 
 
 def smooth_share(share, C, F, rings=SMOOTH_RINGS, weld_tol=1e-6):
