@@ -23,7 +23,9 @@ preview of a landmark file placed by hand (no face detector works on a goat).
 ``place_head_turn``: the head bone of a dense ``place`` rig turned 15 degrees (linear blend
 skinning) on the default head, a bust, ICT's identity000 and the SMPL woman, the skin tinted orange
 by how far each vertex moved (relative to the largest motion): the face and skull turn as one, the neck
-twists, its base stays.
+twists, its base stays. ``transfer_head_turn``: the same on ``transfer`` rigs (ICT identity000, the SMPL
+woman, Lee Perry-Smith, the cow) turned 30 degrees, the jaw turning whole to its lower border
+(``gallery/head_turn_gallery.py``).
 
 ``joints_side_views``: five heads from the left (the default head, ICT identity002, spot, the cow, the
 cat) with ``place``'s head and neck joints, ``transfer``'s head and jaw joints, and the occiput-C1 centre
@@ -292,49 +294,6 @@ def jaw_open_picture(out, degrees=20.0, size=380):
     print(f"{path}: {', '.join(JAW_HEADS)}, jaw closed and opened {degrees:g} degrees")
 
 
-# mesh under ../shared/data; ICT's face is far denser than its neck (its lowest 5% of vertices reach above the
-# chin) and the SMPL woman's neck is cut close under her chin: both left their chins behind before the face's
-# share rose to the chin (geometry/head_share.py)
-TURN_HEADS = {"default head": None, "Lee Perry-Smith": "misc/LeePerrySmith.obj",
-              "ICT identity000": "ict/identity000.obj", "SMPL woman": "zoo/human_woman.obj"}
-
-
-def head_turn_picture(out, degrees=15.0, size=360):
-    """``place_head_turn.png``: each head rigged by ``place`` (dense), its head bone turned ``degrees``
-    about the up axis through the head/neck joint by linear blend skinning; front, three-quarter and
-    side views of the turned head, tinted by motion; one row a head, labelled with the largest motion
-    of the neck base (its lowest 5 %) relative to the peak."""
-    rows = []
-    for label, rel in TURN_HEADS.items():
-        rig = autobones.place(None if rel is None else DATA / rel, density="dense")
-        C = rig.frame.to_canonical(rig.vertices)
-        head = rig.skeleton.names.index("head")
-        pivot = rig.frame.to_canonical(rig.skeleton.heads[[head]])[0]
-        moved = np.zeros(len(rig.skeleton), dtype=bool)  # the head bone and its descendants
-        for j, parent in enumerate(rig.skeleton.parents):  # parents come before their children
-            moved[j] = j == head or (parent >= 0 and moved[parent])
-        share = rig.weights[:, moved].sum(axis=1, keepdims=True)
-        t = np.radians(degrees)
-        R = np.array([[np.cos(t), 0.0, np.sin(t)], [0.0, 1.0, 0.0], [-np.sin(t), 0.0, np.cos(t)]])
-        turned = C + share * ((C - pivot) @ R.T + pivot - C)
-        motion = np.linalg.norm(turned - C, axis=1)
-        a = (motion / motion.max())[:, None] ** 0.7
-        colours = (1 - a) * np.array([0.85, 0.85, 0.85]) + a * np.array([1.0, 0.45, 0.1])
-        bottom = C[:, 1].min()
-        base = C[:, 1] <= bottom + 0.05 * (pivot[1] - bottom)
-        note = f"{label}: neck base {motion[base].max() / motion.max():.1%} of peak"
-        mark = np.array([[C[:, 0].min(), bottom - 0.04, C[:, 2].max()]])
-        rows.append(np.concatenate([
-            render.render_views(turned, rig.faces, vertex_colors=colours, views=(view,), size=(size, size),
-                                points=np.vstack([pivot[None], mark]) if k == 0 else pivot[None],
-                                point_labels=["joint", note] if k == 0 else ["joint"], point_color=(40, 40, 40))
-            for k, view in enumerate(("front", "three_quarter", "side"))], axis=1))
-        print(f"{label}: peak {motion.max():.3g} head sizes, neck base {motion[base].max() / motion.max():.2%} of it")
-    path = Path(out) / "place_head_turn.png"
-    render.save_png(path, np.concatenate(rows, axis=0))
-    print(f"{path}: {', '.join(TURN_HEADS)}, head turned {degrees:g} degrees")
-
-
 def symmetric_picture(out, size=360):
     """``transfer_symmetric_robot.png``: the robot transferred with the symmetric fit off (top) and on
     (bottom, ``--symmetric auto``), posed happy; front and up-from-below views tinted by motion, each
@@ -415,7 +374,7 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
                     + ["expressions", "expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                       "transfer_symmetric_robot", "joints_side_views"]
+                       "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views"]
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
@@ -426,7 +385,7 @@ def main(argv=None):
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
                           + expression_pictures + ["expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                                                   "transfer_symmetric_robot", "joints_side_views"]
+                                                   "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views"]
                           + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
@@ -475,8 +434,10 @@ def make(names, out):
 
             joints_side_views(args.out)
             continue
-        if name == "place_head_turn":
-            head_turn_picture(args.out)
+        if name in ("place_head_turn", "transfer_head_turn"):
+            from head_turn_gallery import head_turn_picture
+
+            head_turn_picture(args.out, command=name.split("_")[0])
             continue
         if name == "transfer_symmetric_robot":
             symmetric_picture(args.out)

@@ -10,13 +10,21 @@ generic rig puts its own blend wherever the warp took it).
 below a boundary through the head joint and 1 above it, a smooth step across a band centred on the
 boundary. Behind the pivot the boundary is level with it (the suboccipital region: the skull above
 turns, the nape below stays); in front it descends to pass under the chin, so the jaw, chin and
-lips turn with the head and the throat stays with the neck. The neck base is pure neck: the share
-is 0 up to the higher of the lowest ``NECK_BASE`` of the vertices and ``NECK_BASE`` of the mesh's
-height (and near a planar neck cut, which an animal's slanted neck lifts above the lowest heights),
-rising over the next ``NECK_RISE`` of the way to the joint. The face and its band keep the whole
-share wherever they hang (a long muzzle below any boundary through the pivot), down to the chin: where
-the lowest ``NECK_BASE`` of the vertices reach above the chin (a face far denser than its neck, a neck
-cut close under the chin) the face's share rises from under the chin, not from that base.
+lips turn with the head and the throat stays with the neck. Given the jaw's angle (the gonions), it
+also passes under the angle and along the mandible's lower border: a line from the pivot to the chin
+passes over a low angle, which then stayed with the neck and the jaw folded along its border. The
+band is as wide across the boundary as it is level behind the pivot, so it does not thin into a
+seam where the boundary falls steeply.
+
+The neck base is pure neck: the share is 0 up to the higher of the lowest ``NECK_BASE`` of the
+vertices and ``NECK_BASE`` of the mesh's height (and near a planar neck cut, which an animal's
+slanted neck lifts above the lowest heights), rising over the next ``NECK_RISE`` of the way to the
+joint. Where those vertices reach the chin (a face far denser than its neck: ICT's reach 0.04 head
+sizes above its menton) they are no neck's base: held still up to the chin, the neck sheared the
+whole head turn across a band under the jaw. The base is then the lower ``DENSE_BASE`` of the neck
+under the chin, the rest of the neck bending. The face and its band keep the whole share wherever
+they hang (a long muzzle below any boundary through the pivot), down to the chin, which keeps it
+even inside the base.
 
 :func:`apply_head_share` then moves weight between the neck and the rest so each row's head side
 sums to the share: the neck gets ``1 - share``; the head and its children keep their weights where
@@ -38,9 +46,11 @@ NECK_RISE = 0.30     # of the way from the neck base to the joint: the head's sh
 HEAD_BAND = 0.10     # head sizes: half-width of the neck/head blend across the boundary
 BAND_SHARE = 0.4     # ... and at most this share of the height from the neck base to the joint
 CHIN_MARGIN = 0.05   # head sizes: the boundary passes this far under the chin
+ANGLE_MARGIN = 2.0   # half-bands: the boundary passes this far under the jaw's angle (0.8-1 there after smoothing)
 ROUND = 0.05         # head sizes: the boundary's bend at the pivot is rounded over this depth
 OPEN_FACE = 0.22     # vector area / area above which a forward-facing open shell is a face mask
 SMOOTH_RINGS = 6     # Jacobi steps of :func:`smooth_share`: every band at least a few edges wide
+DENSE_BASE = 0.5     # of the neck under the chin: its still base where the lowest vertices reach the chin
 STILL = 0.01         # a share this low moves a vertex by at most about 1% of a head turn's peak: kept
 CHUNK = 65536
 
@@ -77,7 +87,8 @@ def mask_distance(C, mask, bound):
 
 
 def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
-               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False, chin_base=False):
+               neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False, chin_base=False,
+               jaw_angle=None):
     """The head's share of each vertex (module docstring): (n,) in [0, 1].
 
     Parameters
@@ -113,7 +124,14 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         The face keeps its share down to the chin (``chin``'s height, fading over ``CHIN_MARGIN``
         below it) even inside the neck base: a measured menton (``transfer``'s landmark) is on the
         jaw, whose weight must stay there, while the lowest ``neck_base`` of the vertices of a face
-        far denser than its neck reach above it (ICT: 0.03 head sizes).
+        far denser than its neck reach above it (ICT: 0.03 head sizes). With ``chin_base`` (either
+        one), such a base drops to the lower ``DENSE_BASE`` of the neck under the chin (not on a
+        face-only mesh).
+    jaw_angle : (float, float), optional
+        The gonions' height (the lower) and depth (their mean): in front of the pivot the boundary
+        also passes ``ANGLE_MARGIN`` half-bands under the angle and from there along the mandible's
+        lower border to under the chin, so the angle turns with the head (:func:`_under_jaw`); under
+        a low angle the share rises from the neck base's top.
     chin_base : bool
         The face's share rises from under the chin (``chin``'s height less ``CHIN_MARGIN``, or the
         neck base when that is lower) to whole at the chin, never inside the lowest ``neck_base`` of
@@ -127,34 +145,31 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
     used = y if faces is None or len(faces) == 0 else y[used_vertices(np.asarray(faces), len(C))]
     yj, zj = float(joint[1]), float(joint[2])
     base = min(neck_base_height(used, neck_base), yj - 1e-6)
-    slope = 1.0
-    if chin is not None:
-        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), -2.0, 2.0))
-    # level behind the pivot, descending in front, the bend rounded (softplus) so the share is smooth
-    boundary = yj - slope * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
+    lowest = min(float(used.min()) + neck_base * float(np.ptp(used)), yj - 1e-6)   # the lowest share of the height
+    if chin is not None and (keep_chin or chin_base) and not face_only and base > chin[0] - CHIN_MARGIN:
+        # the lowest share of the vertices reaches the chin (a face far denser than its neck): no neck's base,
+        # which is then the lower half of the neck under the chin, the rest of it bending
+        base = max(lowest, min(base, lowest + DENSE_BASE * (chin[0] - lowest)))
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
+    boundary, tilt = _boundary(z, yj, zj, chin, jaw_angle, half)
     face_base = face is not None and chin_base and chin is not None and not face_only
-    slant = slant_face = np.ones_like(y)   # the share's and the face's rise above a planar cut
-    if cut is not None and not face_only:
-        centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
-        above = (C - centre) @ -normal
-        top = float((np.asarray(joint, dtype=np.float64) - centre) @ -normal)
-        low = neck_base * float(np.ptp(used))
-        if top > low:
-            slant = smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
-            if face_base:   # whole at the chin (below), never inside the cut's own base
-                chin_above = float((np.array([0.0, chin[0], chin[1]]) - centre) @ -normal)
-                l0 = max(0.0, min(low, chin_above - CHIN_MARGIN))
-                slant_face = smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
+    slant, slant_face = _cut_rises(C, joint, None if face_only else cut, float(np.ptp(used)), neck_base, neck_rise,
+                                   chin if face_base else None)
     rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12)) * slant
-    share = smoothstep((y - boundary + half) / (2.0 * half)) * rise
+    if jaw_angle is not None and chin is not None:
+        # the angle turns with the head (the boundary passes under it, :func:`_boundary`); the rise under a
+        # low angle (a big animal jaw) starts no lower than the neck base
+        ya = float(jaw_angle[0])
+        a0 = max(base, ya - (1.0 + ANGLE_MARGIN) * half)   # never in the neck base
+        if ya > a0:
+            rise = np.maximum(rise, smoothstep((y - a0) / (ya - a0)) * slant)
+    share = smoothstep(((y - boundary) / tilt + half) / (2.0 * half)) * rise
     if face_base:
         # the face's own base stops under the chin and its share is whole at the chin: the lowest share
         # of the vertices reaches above the chin on a face far denser than its neck (ICT: 0.04 head
         # sizes) or a neck cut close under it, and there, or rising over the neck's height, the chin
         # stayed behind on a head turn (share 0.0-0.6 on ICT's and the SMPL bodies' mentons). The
         # lowest share of the height, and of the height above a planar cut, stay still
-        lowest = min(float(used.min()) + neck_base * float(np.ptp(used)), yj - 1e-6)
         b0 = max(lowest, min(base, chin[0] - CHIN_MARGIN))
         rise = smoothstep((y - b0) / max(chin[0] - b0, CHIN_MARGIN / 4)) * slant_face
     if face is not None:
@@ -167,6 +182,62 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
             rise = np.maximum(rise, smoothstep((y - chin[0]) / CHIN_MARGIN + 1.0))
         share = np.maximum(share, face if whole else face * rise)
     return share
+
+
+def _cut_rises(C, joint, cut, height, neck_base, neck_rise, chin=None):
+    """((n,), (n,)): the share's rise above a planar neck ``cut`` (centre, outward normal; None: none),
+    0 within ``neck_base`` of the mesh's ``height`` from it and whole ``neck_rise`` of the way from there
+    to the ``joint``; and the face's, whole at the ``chin`` (height, depth; None: the share's), never
+    inside the cut's own base."""
+    ones = np.ones(len(C))
+    if cut is None:
+        return ones, ones
+    centre, normal = np.asarray(cut[0], dtype=np.float64), np.asarray(cut[1], dtype=np.float64)
+    above = (C - centre) @ -normal
+    top = float((np.asarray(joint, dtype=np.float64) - centre) @ -normal)
+    low = neck_base * height
+    if top <= low:
+        return ones, ones
+    slant = smoothstep((above - low) / max(neck_rise * (top - low), 1e-12))
+    if chin is None:
+        return slant, ones
+    chin_above = float((np.array([0.0, chin[0], chin[1]]) - centre) @ -normal)
+    l0 = max(0.0, min(low, chin_above - CHIN_MARGIN))
+    return slant, smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
+
+
+def _boundary(z, yj, zj, chin, jaw_angle, half, eps=1e-4):
+    """((n,), (n,)): the boundary's height at each depth ``z`` and how much steeper than level it runs there
+    (``sqrt(1 + slope^2)``: the band is ``half`` wide across the boundary, not vertically, or where the
+    boundary falls steeply, in front of the pivot down to under the jaw's angle, a vertical band is a thin
+    seam that a head turn creases).
+
+    Level with the pivot ``(yj, zj)`` behind it, descending in front to ``CHIN_MARGIN`` under the
+    ``chin`` (height, depth; slope 1 without it, kept within 2), the bend rounded (softplus) so the share
+    is smooth. Given the ``jaw_angle`` too, it runs no higher than :func:`_under_jaw`: a line from the
+    pivot to the chin passed over the mandible's angle (gonion share 0.0-0.45 on 26 of the 27 landmarked
+    shared heads), which then stayed with the neck and the jaw folded along its border on a head turn."""
+    slope = 1.0
+    if chin is not None:
+        slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), -2.0, 2.0))
+
+    def height(zz):
+        b = yj - slope * ROUND * np.logaddexp(0.0, (zz - zj) / ROUND)
+        return b if jaw_angle is None or chin is None else np.minimum(b, _under_jaw(zz, yj, zj, jaw_angle, chin, half))
+
+    return height(z), np.sqrt(1.0 + ((height(z + eps) - height(z - eps)) / (2.0 * eps)) ** 2)
+
+
+def _under_jaw(z, yj, zj, angle, chin, half):
+    """(n,) the boundary under the mandible's lower border: from the pivot down to ``ANGLE_MARGIN *
+    half`` under the jaw's angle (``angle``: the gonions' height and depth), then along the border to
+    ``CHIN_MARGIN`` under the chin (``chin``: height, depth), so the angle turns with the head."""
+    yg, zg = float(angle[0]) - ANGLE_MARGIN * half, float(angle[1])
+    yc, zc = float(chin[0]) - CHIN_MARGIN, float(chin[1])
+    down = (yj - yg) / max(zg - zj, ROUND)
+    to_angle = yj - down * ROUND * np.logaddexp(0.0, (z - zj) / ROUND)
+    along = yg + (z - zg) * (yc - yg) / max(zc - zg, ROUND)
+    return np.maximum(to_angle, along)
 
 
 def smooth_share(share, C, F, rings=SMOOTH_RINGS, weld_tol=1e-6):

@@ -10,8 +10,10 @@ lowest vertices: a 15 degree head turn moved the zoo's neck bases by 5-100% of t
 So the transferred rig gets the same head share as ``place``'s
 (:mod:`autobones.geometry.head_share`): 0 on the neck base (the lowest vertices and heights and a planar
 neck cut's neighbourhood), a blend centred on a boundary through the head joint that passes under the
-chin (the menton and pogonion landmarks), 1 above it; the carried face (the generic's face depth group
-without its neck region) and a band around it keep the whole share wherever they hang, down to the
+chin (the menton and pogonion landmarks) and the jaw's angle (the gonions, or where the generic rig's
+gonions landed: the share there was 0.0-0.45 on the zoo's heads before), 1 above it; the carried face
+(the generic's face depth group without its neck region) and a band around it keep the whole share
+wherever they hang, down to the
 menton even inside the neck base (ICT's dense face puts 5% of its vertices above its chin). It is
 computed in the landmarks' anatomical frame (:func:`anatomical_axes`, head sizes: free of the file's
 rotation and unit), then smoothed over the mesh (:func:`autobones.geometry.head_share.smooth_share`)
@@ -34,9 +36,10 @@ from ..geometry.topology import used_vertices, without_large_parts
 
 FACE_HOLD = 0.16   # head sizes: the face keeps the head's whole share this far out (place's 2 x 0.08)
 CHIN = ("menton", "pogonion")
+ANGLE = ("gonion_l", "gonion_r")
 
 
-def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None):
+def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None, fitted=None):
     """``W`` (n, b) with the head's share set by position (module docstring), a new array, and the
     vertices left still (n,) bool (a head share of at most ``STILL``; None when nothing changed).
 
@@ -57,6 +60,9 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
         The carried face.
     cues : dict, optional
         :func:`autobones.cut_cues.cut_cues` of ``(V, F)`` when already computed.
+    fitted : dict str -> (3,) float, optional
+        The generic rig's landmarks where its fitted skin put them (input frame): the gonions, where
+        ``landmarks`` has none, place the jaw's angle.
 
     Returns
     -------
@@ -81,18 +87,30 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None)
         return W, None
     chin = [canonical(landmarks[n])[0] for n in CHIN if n in landmarks]
     chin = (min(p[1] for p in chin), max(p[2] for p in chin)) if chin else None
+    angle = [canonical(p)[0] for p in jaw_angle_points(landmarks, fitted)]
+    angle = (min(p[1] for p in angle), float(np.mean([p[2] for p in angle]))) if angle else None
     # the cut of the head itself, not of a large part beside it (hair: its rim is no neck cut)
     cues = cut_cues(V, without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)) if cues is None else cues
     cues = midline_cuts(cues, frame.rotation[0], frame.origin @ frame.rotation[0])  # an eye hole is no cut
     cut = (canonical(cues["loop_centre"])[0], cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
     hold = 1.0 - smoothstep(np.minimum(mask_distance(C, facial_mask, FACE_HOLD), FACE_HOLD) / FACE_HOLD)
-    share = head_share(C, joint, faces=F, chin=chin, face_only=face_only(C, F), face=hold, cut=cut, keep_chin=True)
+    share = head_share(C, joint, faces=F, chin=chin, face_only=face_only(C, F), face=hold, cut=cut, keep_chin=True,
+                       jaw_angle=angle)
     # the bands are head sizes: on a coarse mesh some are an edge wide, a step of the jaw weight
     share = smooth_share(share, C, F)
     # the jaw's repair (after this) holds the still vertices, but not in the face's band: where the chin
     # nears the base (the bunny, the falcon statue) the jaw as the landmarks say wins over a still base
     still = (share <= STILL) & (hold <= 0)
     return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), still
+
+
+def jaw_angle_points(landmarks, fitted=None):
+    """The gonions the head's ``landmarks`` give, else those of ``fitted`` (both dict str -> (3,)), else []."""
+    for points in (landmarks, fitted or {}):
+        found = [np.asarray(points[n], dtype=np.float64) for n in ANGLE if n in points]
+        if found:
+            return found
+    return []
 
 
 def anatomical_axes(V, F, landmarks, rotation):

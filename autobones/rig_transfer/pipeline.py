@@ -38,10 +38,10 @@ from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
-from .neck import still_neck_base
+from .neck import ANGLE, still_neck_base
 from .fields import transfer_fields
 from .symmetry import MAX_LANDMARK_MISMATCH, Symmetry
-from .under_skin import carry_muscles, under_skin_warp
+from .under_skin import carry_muscles, ride, under_skin_warp
 from ..errors import AutobonesError, counted
 from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
@@ -270,7 +270,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     fields, W, skeleton, reliable = _carry_attributes(generic, P, ok, V, F, skeleton, under)
     lap("attributes")
     labels, facial_mask = _face_labels(fields, generic, len(V))
-    W, jaw_note = _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap)
+    fitted = _fitted_landmarks(generic, P, ANGLE)
+    W, jaw_note = _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted)
 
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
@@ -322,14 +323,25 @@ def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
     return under, skeleton, placed
 
 
-def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap):
+def _fitted_landmarks(generic, P, names):
+    """{name: (3,)}: the generic rig's landmarks ``names`` (those it has) where the correspondence ``P``
+    (n_rig, 3) carried its skin, head frame."""
+    names = [n for n in names if n in generic.landmarks]
+    if not names:
+        return {}
+    points = np.array([generic.landmarks[n] for n in names], dtype=np.float64)
+    return dict(zip(names, ride(points, generic.vertices, generic.faces, P)))
+
+
+def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted=None):
     """(W, note): the carried weights ``W`` (n, b) with the neck base made still and the jaw weight
-    repaired from the landmarks ``lm``; ``note`` says why the jaw could not be cut cleanly, or None."""
+    repaired from the landmarks ``lm``; ``note`` says why the jaw could not be cut cleanly, or None.
+    ``fitted``: the generic's landmarks on the head (the jaw's angle where ``lm`` has no gonions)."""
     # the neck base still on a head turn, the head/neck blend on the head joint (the generic's own blend
     # lies far below it and the warp drags it anywhere: benchmarks zoo check 3); the face is untouched.
     # Before the jaw's repair, which has the last word where the chin reaches the neck base (a chin at
     # the mesh's bottom: the bunny) and keeps the jaw weight's falloff smooth
-    W, still = still_neck_base(V, F, W, skeleton, frame, lm, facial_mask)
+    W, still = still_neck_base(V, F, W, skeleton, frame, lm, facial_mask, fitted=fitted)
     lap("neck")
     # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
     jaw_details = {}
