@@ -195,6 +195,23 @@ def test_head_share_passes_under_the_jaws_angle():
     assert at(low, -0.38, -0.08) > 0.6 > at(without, -0.38, -0.08) and low[grid[:, 1] <= -0.45].max() == 0.0
 
 
+def test_head_share_band_is_as_wide_where_the_boundary_falls_steeply():
+    """The head/neck blend is as wide across the boundary where it falls steeply (in front of the pivot,
+    down to under a low jaw angle) as it is behind the pivot, where it is level: measured vertically,
+    the steep stretch was a seam a few times steeper, which a head turn creased (ICT's neck)."""
+    from autobones.geometry.head_share import head_share
+
+    joint = np.array([0.0, 0.0, -0.2])
+    step = 0.0025
+    ys, zs = np.arange(-1.5, 0.5, step), np.arange(-0.45, 0.25, step)   # a long neck: its base far below
+    grid = np.array([[0.0, y, z] for y in ys for z in zs])
+    share = head_share(grid, joint, chin=(-0.3, 0.2), jaw_angle=(-0.28, -0.12)).reshape(len(ys), len(zs))
+    gy, gz = np.gradient(share, step)
+    slope = np.hypot(gy, gz)[ys > -0.9]   # above the neck base's rise
+    level = slope[:, zs < -0.3].max()   # behind the pivot: the band's own steepness
+    assert level > 0 and slope.max() <= 1.1 * level, (slope.max(), level)
+
+
 @pytest.mark.parametrize("rel", [None, "misc/LeePerrySmith.obj"], ids=["default", "lps"])
 def test_no_seam_steeper_than_the_heat_weights(rigs, rel):
     """The restriction's smooth steps change the weights no faster along an edge (per head size) than

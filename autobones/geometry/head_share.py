@@ -13,8 +13,8 @@ turns, the nape below stays); in front it descends to pass under the chin, so th
 lips turn with the head and the throat stays with the neck. Given the jaw's angle (the gonions), it
 also passes under the angle and along the mandible's lower border: a line from the pivot to the chin
 passes over a low angle, which then stayed with the neck and the jaw folded along its border. The
-band is as wide across the boundary as it is level behind the pivot, so it does not thin into a
-seam where the boundary falls steeply.
+band is measured across the boundary (a signed distance in the midline plane), so it does not thin
+into a seam where the boundary falls steeply.
 
 The neck base is pure neck: the share is 0 up to the higher of the lowest ``NECK_BASE`` of the
 vertices and ``NECK_BASE`` of the mesh's height (and near a planar neck cut, which an animal's
@@ -151,19 +151,19 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         # which is then the lower half of the neck under the chin, the rest of it bending
         base = max(lowest, min(base, lowest + DENSE_BASE * (chin[0] - lowest)))
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
-    boundary, tilt = _boundary(z, yj, zj, chin, jaw_angle, half)
+    across = _across(y, z, yj, zj, chin, jaw_angle, half)
     face_base = face is not None and chin_base and chin is not None and not face_only
     slant, slant_face = _cut_rises(C, joint, None if face_only else cut, float(np.ptp(used)), neck_base, neck_rise,
                                    chin if face_base else None)
     rise = smoothstep((y - base) / max(neck_rise * (yj - base), 1e-12)) * slant
     if jaw_angle is not None and chin is not None:
-        # the angle turns with the head (the boundary passes under it, :func:`_boundary`); the rise under a
+        # the angle turns with the head (the boundary passes under it, :func:`_across`); the rise under a
         # low angle (a big animal jaw) starts no lower than the neck base
         ya = float(jaw_angle[0])
         a0 = max(base, ya - (1.0 + ANGLE_MARGIN) * half)   # never in the neck base
         if ya > a0:
             rise = np.maximum(rise, smoothstep((y - a0) / (ya - a0)) * slant)
-    share = smoothstep(((y - boundary) / tilt + half) / (2.0 * half)) * rise
+    share = smoothstep((across + half) / (2.0 * half)) * rise
     if face_base:
         # the face's own base stops under the chin and its share is whole at the chin: the lowest share
         # of the vertices reaches above the chin on a face far denser than its neck (ICT: 0.04 head
@@ -206,17 +206,18 @@ def _cut_rises(C, joint, cut, height, neck_base, neck_rise, chin=None):
     return slant, smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
 
 
-def _boundary(z, yj, zj, chin, jaw_angle, half, eps=1e-4):
-    """((n,), (n,)): the boundary's height at each depth ``z`` and how much steeper than level it runs there
-    (``sqrt(1 + slope^2)``: the band is ``half`` wide across the boundary, not vertically, or where the
-    boundary falls steeply, in front of the pivot down to under the jaw's angle, a vertical band is a thin
-    seam that a head turn creases).
+def _across(y, z, yj, zj, chin, jaw_angle, half):
+    """(n,) each point's signed distance from the boundary in the midline plane (``y`` height, ``z``
+    depth; positive above it), so the band is ``half`` wide across the boundary everywhere: measured
+    vertically, it thinned where the boundary falls steeply (in front of the pivot, down to under the
+    jaw's angle) into a seam a head turn creased (ICT's neck).
 
-    Level with the pivot ``(yj, zj)`` behind it, descending in front to ``CHIN_MARGIN`` under the
-    ``chin`` (height, depth; slope 1 without it, kept within 2), the bend rounded (softplus) so the share
-    is smooth. Given the ``jaw_angle`` too, it runs no higher than :func:`_under_jaw`: a line from the
-    pivot to the chin passed over the mandible's angle (gonion share 0.0-0.45 on 26 of the 27 landmarked
-    shared heads), which then stayed with the neck and the jaw folded along its border on a head turn."""
+    The boundary is level with the pivot ``(yj, zj)`` behind it and descends in front to
+    ``CHIN_MARGIN`` under the ``chin`` (height, depth; slope 1 without it, kept within 2), the bend
+    rounded (softplus). Given the ``jaw_angle`` too, it runs no higher than :func:`_under_jaw`: a line
+    from the pivot to the chin passed over the mandible's angle (gonion share 0.0-0.45 on 26 of the 27
+    landmarked shared heads), which then stayed with the neck and the jaw folded along its border on a
+    head turn. The curve is sampled every ``half / 40`` along its length (one k-d tree query per point)."""
     slope = 1.0
     if chin is not None:
         slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), -2.0, 2.0))
@@ -225,7 +226,14 @@ def _boundary(z, yj, zj, chin, jaw_angle, half, eps=1e-4):
         b = yj - slope * ROUND * np.logaddexp(0.0, (zz - zj) / ROUND)
         return b if jaw_angle is None or chin is None else np.minimum(b, _under_jaw(zz, yj, zj, jaw_angle, chin, half))
 
-    return height(z), np.sqrt(1.0 + ((height(z + eps) - height(z - eps)) / (2.0 * eps)) ** 2)
+    # the curve sampled evenly along its length (a steep stretch sampled evenly in depth left gaps)
+    zz = np.arange(float(z.min()) - 4.0 * half, float(z.max()) + 4.0 * half, half / 400.0)
+    curve = np.column_stack([zz, height(zz)])
+    length = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))]
+    at = np.arange(0.0, length[-1], half / 40.0)
+    curve = np.column_stack([np.interp(at, length, curve[:, 0]), np.interp(at, length, curve[:, 1])])
+    d, _ = cKDTree(curve).query(np.column_stack([z, y]))
+    return np.where(y >= height(z), d, -d)
 
 
 def _under_jaw(z, yj, zj, angle, chin, half):
