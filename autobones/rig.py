@@ -302,22 +302,26 @@ class Rig:
         return (au is None and expression is None and muscles is None and not jaw_deg and eyelids is None
                 and gaze is None and look_at is None and not tissue)
 
-    def turn_bones(self, head_deg=None, neck_deg=None):
+    def turn_bones(self, head_deg=None, neck_deg=None, axes=None):
         """Vertices (n, 3), input frame and units, with the ``head`` and ``neck`` bones turned by
         (pitch, yaw, roll) degrees about +X, +Y, +Z of the head frame at their joints and every bone
         under them carried along, by linear blend skinning with the rig's own weights (what a glTF
-        player does): how any rig, ``place``'s included, turns. All zero: the vertices, exactly."""
+        player does): how any rig, ``place``'s included, turns. All zero: the vertices, exactly.
+        ``axes``: (3, 3) rows left, up, front the angles are about instead of the rig frame's (a
+        ``transfer`` rig's landmarks' anatomical frame, :func:`autobones.rig_transfer.neck.anatomical_axes`)."""
         from .expressions.bones import blend_bones, bone_transforms
 
+        R = self.frame.rotation if axes is None else np.asarray(axes, dtype=np.float64)
+        origin, size = self.frame.origin, self.frame.size
         V = np.asarray(self.vertices, dtype=np.float64)
-        C = self.frame.to_canonical(V)
-        pivots = self.frame.to_canonical(np.asarray(self.skeleton.heads, dtype=np.float64))
+        C = (V - origin) @ R.T / size
+        pivots = (np.asarray(self.skeleton.heads, dtype=np.float64) - origin) @ R.T / size
         moves = bone_transforms(list(self.skeleton.names), pivots, 0.0, None, None, head_deg, neck_deg,
                                 parents=list(self.skeleton.parents))
         if not moves:
             return V.copy()
         d = blend_bones(np.zeros_like(C), C, np.asarray(self.weights, dtype=np.float64), moves)
-        return self.frame.from_canonical(C + d)
+        return (C + d) * size @ R + origin
 
     def _expression_definitions(self):
         """The definitions ``pose`` uses: the built model's, else the sidecar's, else the packaged ones."""

@@ -36,7 +36,6 @@ import zoo_checks as zc  # noqa: E402
 from zoo import DATA, heads_in  # noqa: E402
 
 import autobones  # noqa: E402
-from autobones.geometry.rotations import axis_rotation  # noqa: E402
 from autobones.io.landmarks import read_landmarks  # noqa: E402
 from autobones.io.mesh import load_mesh  # noqa: E402
 from autobones.rig_transfer.neck import anatomical_axes  # noqa: E402
@@ -67,18 +66,15 @@ def shares(rig, lm, angle):
 def strained(rig, degrees=STRAIN_TURN):
     """Share of the edges whose length changes by more than ``STRAIN`` on a ``degrees`` turn of the head
     bone (and its children) about the up of the rig's landmarks' anatomical frame (its own without
-    landmarks) through the head joint, linear blend skinning: a fold or a seam is a band of such edges."""
-    R = anatomical_axes(rig.vertices, rig.faces, rig.landmarks, rig.frame.rotation) if rig.landmarks \
-        else rig.frame.rotation
-    C = rig.vertices @ R.T
-    pivot = rig.skeleton.heads[rig.skeleton.names.index("head")] @ R.T
-    M = axis_rotation(1, degrees)
-    X = C + head_side(rig)[:, None] * ((C - pivot) @ M.T + pivot - C)
+    landmarks) through the head joint, linear blend skinning (``Rig.turn_bones``): a fold or a seam is a
+    band of such edges."""
+    axes = anatomical_axes(rig.vertices, rig.faces, rig.landmarks, rig.frame.rotation) if rig.landmarks else None
+    V, X = np.asarray(rig.vertices, dtype=np.float64), rig.turn_bones(head_deg=(0.0, degrees, 0.0), axes=axes)
     F = rig.faces
     E = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
-    before = np.linalg.norm(C[E[:, 0]] - C[E[:, 1]], axis=1)
+    before = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
     after = np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1)
-    ok = before > 1e-9 * float(np.ptp(C))
+    ok = before > 1e-9 * float(np.ptp(V))
     return float(np.mean(np.abs(after[ok] / before[ok] - 1.0) > STRAIN))
 
 

@@ -47,29 +47,22 @@ def _rigs(command):
         yield label, autobones.transfer(DATA / mesh, marks)
 
 
-def _canonical(rig):
-    """A function (k, 3) -> (k, 3) into the head's frame in head sizes: the rig's own, or for a rig with
-    landmarks (``transfer``'s) their anatomical frame, which ``transfer``'s neck step works in (the cow's
-    rig frame leans 39 degrees with its snout: its "lowest" vertices are its chin)."""
+def _axes(rig):
+    """(3, 3) rows left, up, front of the head's frame: the rig's own, or for a rig with landmarks
+    (``transfer``'s) their anatomical frame, which ``transfer``'s neck step works in (the cow's rig frame
+    leans 39 degrees with its snout: its "lowest" vertices are its chin)."""
     if not rig.landmarks:
-        return rig.frame.to_canonical
-    R = anatomical_axes(rig.vertices, rig.faces, rig.landmarks, rig.frame.rotation)
-    return lambda P: (np.asarray(P, dtype=np.float64) - rig.frame.origin) @ R.T / rig.frame.size
+        return rig.frame.rotation
+    return anatomical_axes(rig.vertices, rig.faces, rig.landmarks, rig.frame.rotation)
 
 
 def _row(label, rig, degrees, size):
-    """One head's three views, turned; and its neck base's motion over the peak."""
-    canonical = _canonical(rig)
+    """One head's three views, turned (``Rig.turn_bones``); and its neck base's motion over the peak."""
+    axes = _axes(rig)
+    canonical = lambda P: (np.asarray(P, dtype=np.float64) - rig.frame.origin) @ axes.T / rig.frame.size  # noqa: E731
     C = canonical(rig.vertices)
-    head = rig.skeleton.names.index("head")
-    pivot = canonical(rig.skeleton.heads[[head]])[0]
-    moved = np.zeros(len(rig.skeleton), dtype=bool)  # the head bone and its descendants
-    for j, parent in enumerate(rig.skeleton.parents):  # parents come before their children
-        moved[j] = j == head or (parent >= 0 and moved[parent])
-    share = rig.weights[:, moved].sum(axis=1, keepdims=True)
-    t = np.radians(degrees)
-    R = np.array([[np.cos(t), 0.0, np.sin(t)], [0.0, 1.0, 0.0], [-np.sin(t), 0.0, np.cos(t)]])
-    turned = C + share * ((C - pivot) @ R.T + pivot - C)
+    pivot = canonical(rig.skeleton.heads[[rig.skeleton.names.index("head")]])[0]
+    turned = canonical(rig.turn_bones(head_deg=(0.0, degrees, 0.0), axes=axes))
     motion = np.linalg.norm(turned - C, axis=1)
     a = (motion / motion.max())[:, None] ** 0.7
     colours = (1 - a) * np.array([0.85, 0.85, 0.85]) + a * np.array([1.0, 0.45, 0.1])
