@@ -18,6 +18,9 @@ from .geometry.topology import used_vertices, weld_by_size
 # cut (the shared heads' neck cuts and bust bases: 0.70-3.2; the robot's bolt holes 0.05, the menpo
 # template's mouth 0.46)
 HOLE = 0.5
+# a loop at the far end of the surface from the main one is a second cut when it is at least this share
+# of the main loop's length (a missing crown against the neck's cut: 0.7-1.4)
+FAR_SHARE = 0.5
 
 
 def cut_cues(V, F):
@@ -77,28 +80,71 @@ def midline_cuts(cues, normal, offset):
 def _main_loop(cues):
     """The longest open-rim loop (``cues["rim_loop"]`` labels the rim edges) as a cut: its length,
     its best-fit plane's unit normal pointing away from the surface (toward the missing cap) and
-    how far its points stray from that plane, over the loop's RMS radius.
+    how far its points stray from that plane, over the loop's RMS radius; and the far loop
+    (:func:`_far_loop`), when the surface is open at its other end too.
 
     A neck cut or a bust base is a planar loop (every zoo head cut at the neck: 0.00-0.02 of
     the extent); a face-only capture's rim follows the face's outline round to the ears
     (0.13-0.27), and eye or mouth holes are short loops of their own."""
-    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf, "loop_centre": None}
+    none = {"loop_length": 0.0, "loop_normal": None, "loop_flatness": np.inf, "loop_centre": None, "far_loop": None}
     edge_comp = cues["rim_loop"]
     if not len(edge_comp):
         return none
     lengths = np.bincount(edge_comp, weights=cues["rim_length"])
     best = int(np.argmax(lengths))  # ties: the lowest label, a function of the vertex order only
-    pts = cues["rim_mid"][edge_comp == best]
-    w = cues["rim_length"][edge_comp == best]
+    surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
+    main = _loop_plane(cues, best, surface_mid)
+    return {"loop_length": float(lengths[best]), "loop_normal": main[0], "loop_flatness": main[1],
+            "loop_centre": main[2], "far_loop": _far_loop(cues, lengths, best, main, surface_mid)}
+
+
+def _loop_plane(cues, label, surface_mid):
+    """One rim loop's best-fit plane: (unit normal (3,) pointing away from the surface's area
+    centroid ``surface_mid``, flatness (RMS off the plane over the in-plane RMS radius), centre (3,))."""
+    pts = cues["rim_mid"][cues["rim_loop"] == label]
+    w = cues["rim_length"][cues["rim_loop"] == label]
     mid = w @ pts / w.sum()
     d = pts - mid
     d = d / max(float(np.abs(d).max()), 1e-300)  # unit-free: moments of a head in 1e150 units overflowed
     evals, evecs = np.linalg.eigh((d * w[:, None]).T @ d / w.sum())
     normal = evecs[:, 0]
-    surface_mid = cues["area2"] @ cues["centroid"] / max(cues["area2"].sum(), 1e-300)
     normal = normal if (mid - surface_mid) @ normal >= 0 else -normal
     flatness = float(np.sqrt(max(evals[0], 0.0)) / max(np.sqrt(evals[1] + evals[2]), 1e-300))
-    return {"loop_length": float(lengths[best]), "loop_normal": normal, "loop_flatness": flatness, "loop_centre": mid}
+    return normal, flatness, mid
+
+
+def _far_loop(cues, lengths, best, main, surface_mid):
+    """The longest other loop at the surface's far end from the main one, as ``{"length", "normal",
+    "flatness", "centre"}``, or None: at least ``FAR_SHARE`` of the main loop's length, beyond the
+    surface's centroid on the other side, facing the other way (normals more than 135 degrees apart).
+
+    A head open at both ends is a band: a neck cut and a missing crown (scans that did not capture
+    the hair), the longer of the two either (benchmarks/accessories.py: the crown's loop 0.7-1.4 of
+    the neck's). Read as the only cut, the main loop stood such heads on their crowns. A mouth or a
+    cyclops' eye hole on the midline lies near the centroid and faces forward (ICT's mouth and the
+    ogre's eye: 0.05 and 0.08 of the surface's square-root area off it), no far loop."""
+    normal, _, centre = main
+    reach = (centre - surface_mid) @ normal
+    far = None
+    for label in np.argsort(-lengths, kind="stable"):
+        if label == best or lengths[label] < FAR_SHARE * lengths[best]:
+            continue
+        n2, flat2, c2 = _loop_plane(cues, label, surface_mid)
+        if n2 @ normal < -np.cos(np.radians(45.0)) and (c2 - surface_mid) @ normal < -0.5 * reach:
+            far = {"length": float(lengths[label]), "normal": n2, "flatness": flat2, "centre": c2}
+            break
+    return far
+
+
+def bottom_cut(cues, up):
+    """``cues`` with its main loop the cut at the bottom along ``up`` (unit (3,)): the far loop's
+    (:func:`_far_loop`) when the main one lies at the top (a missing crown longer than the neck's
+    cut), else ``cues`` as they are."""
+    far = cues.get("far_loop")
+    if far is None or cues["loop_normal"] @ up <= far["normal"] @ up:
+        return cues
+    return dict(cues, loop_length=far["length"], loop_normal=far["normal"], loop_flatness=far["flatness"],
+                loop_centre=far["centre"], far_loop=None)
 
 
 def open_shell_facing(cues):

@@ -148,6 +148,9 @@ def cut_candidates(P, normal, candidates, cues, ref):
         across = max(np.ptp(P @ normal), 1e-300)
         thin = front_part(ref, min(np.ptp(P @ f) for _, f in mask) / across)
         return mask, [(thin, front_part(ref, np.ptp(P @ f) / across)) for _, f in mask], True
+    if cues.get("far_loop") is not None:
+        # open at both ends (a neck cut and a missing crown): the bottom is one of the two cuts
+        return near([tuple(-cues["loop_normal"]), tuple(-cues["far_loop"]["normal"])]), ref, False
     if winner is not None:
         return near([winner]), ref, False
     runner = next((k for k in ups if np.array(k) @ np.array(top) < NEIGHBOUR), None)

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .cut_cues import cut_cues as _cut_cues, cut_up_front, is_planar_cut, midline_cuts
+from .cut_cues import bottom_cut, cut_cues as _cut_cues, cut_up_front, is_planar_cut, midline_cuts
 from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
@@ -248,9 +248,10 @@ def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
     if free:
         # candidates 30 degrees apart round the plane: settle the angle between them
         up_d, front_d = refine_angle(P, normal, up_d, front_d, ref[best] if isinstance(ref, list) else ref)
-    if free and planar and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE):
+    if free and planar and cues.get("far_loop") is None and min(scores) > (FACE_UNLIKE if face_only else HUMAN_LIKE):
         # no human face matches (an animal, a cartoon): the reference head cannot tell its
-        # front from its back, the neck cut can
+        # front from its back, the neck cut can. Not a head open at both ends (a scan missing its
+        # crown: the face overlays worse, but which end is the neck only the overlay tells)
         up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
     return up_d, front_d
 
@@ -265,6 +266,7 @@ def _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err):
     left = normal * np.sign(normal @ np.cross(up_d, front_d))
     up_d = up_d - (up_d @ left) * left
     up_d /= np.linalg.norm(up_d)
+    cues = bottom_cut(cues, up_d)   # open at both ends: the neck's cut, not a missing crown
     R = np.vstack([left, up_d, np.cross(left, up_d)])
     origin = onto_plane(center, normal, offset)
     used = used_vertices(F, len(V))

@@ -191,6 +191,38 @@ def test_main_cut_loop_is_the_neck_cut():
     assert cut_cues(V, F)["loop_flatness"] > 0.12
 
 
+def test_a_scan_open_at_its_crown_and_its_neck_stands_on_its_neck():
+    """A scan that did not capture the top of the skull (every face within 0.2 head sizes of the top
+    removed: a hole across the midline, longer than the neck's cut on Demosthenes) is open at both
+    ends. Read as the only cut, the crown's hole stood the bust on its head (146 deg off); both loops
+    are cuts now (``far_loop``), the face's overlay tells which is the neck, and the frame's cut is
+    the neck's. A mouth's loop on the midline (ICT's) is no far loop."""
+    import sys
+    from pathlib import Path
+
+    from scipy.spatial.transform import Rotation
+
+    from autobones.cut_cues import cut_cues, midline_cuts
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from accessories import without_crown   # the copies benchmarks/accessories.py measures
+
+    V, F = load_mesh(data("misc/demosthenes-low-res.obj"))
+    bare = detect_frame(V, F)
+    Vc, Fc = without_crown(V, F, bare, 0.2)
+    Q = Rotation.random(random_state=7).as_matrix()
+    frame = detect_frame(Vc @ Q.T, Fc)
+    back = frame.rotation @ Q
+    for row in (1, 2):   # up, front
+        assert np.degrees(np.arccos(np.clip(back[row] @ bare.rotation[row], -1, 1))) < 30
+    assert frame.cut is not None and frame.cut[1][1] < -0.7   # canonical: the cut faces down
+    cues = midline_cuts(cut_cues(Vc, Fc), bare.rotation[0], bare.origin @ bare.rotation[0])
+    assert cues["far_loop"] is not None and cues["loop_normal"] @ bare.rotation[1] > 0.7  # the crown is longer
+    V, F = load_mesh(data("ict/identity000.obj"))
+    frame = detect_frame(V, F)
+    assert midline_cuts(cut_cues(V, F), frame.rotation[0], frame.origin @ frame.rotation[0])["far_loop"] is None
+
+
 def _landmark_frame(path, V):
     """(up, front) of a landmark file as issue #31 defines them: front opisthocranion (else the
     tragions' midpoint, else the centroid of ``V``) -> pronasale, up menton -> vertex made

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cut_cues import cut_cues, is_planar_cut, midline_cuts
+from ..cut_cues import bottom_cut, cut_cues, is_planar_cut, midline_cuts
 from ..geometry.head_share import (STILL, apply_head_share, face_only, head_share, mask_distance, neck_base_height,
                                    smooth_share)
 from ..geometry.smooth import smoothstep
@@ -92,6 +92,7 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None,
     # the cut of the head itself, not of a large part beside it (hair: its rim is no neck cut)
     cues = cut_cues(V, without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)) if cues is None else cues
     cues = midline_cuts(cues, frame.rotation[0], frame.origin @ frame.rotation[0])  # an eye hole is no cut
+    cues = bottom_cut(cues, frame.rotation[1])  # open at both ends: the neck's cut, not a missing crown
     cut = (canonical(cues["loop_centre"])[0], cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
     hold = 1.0 - smoothstep(np.minimum(mask_distance(C, facial_mask, FACE_HOLD), FACE_HOLD) / FACE_HOLD)
     share = head_share(C, joint, faces=F, chin=chin, face_only=face_only(C, F), face=hold, cut=cut, keep_chin=True,
