@@ -174,6 +174,27 @@ def test_the_chin_and_lower_lip_turn_with_the_head(rigs, rel, marks):
     assert share[i].min() >= 0.9, dict(zip(("menton", "labiale_inferius", "stomion"), share[i].round(2)))
 
 
+def test_the_jaws_angle_turns_with_the_head_on_a_place_rig(rigs):
+    """``place`` has no gonions: the jaw's angle is taken where human heads put it between its head
+    joint and its chin (``placement.pipeline.jaw_angle``). On ICT identity000, at the generic rig's
+    gonions where ``transfer``'s fit put them, the head's share is 0.64: the line from the pivot to the
+    chin left them at 0.37, and the jaw folded along its lower border on a head turn. (Not whole: the
+    boundary under an estimated angle stays two half-bands above the neck base, which stays still.)"""
+    from autobones.rig_transfer.pipeline import load_generic
+    from autobones.rig_transfer.under_skin import ride
+
+    V, F = load_mesh(data("ict/identity000.obj"))
+    details = {}
+    autobones.transfer((V, F), read_landmarks(data("ict/identity000.landmarks.json")), details=details)
+    generic = load_generic()
+    Q = ride(np.array([generic.landmarks[n] for n in ("gonion_l", "gonion_r")]), generic.vertices,
+             generic.faces, details["correspondence"])
+    rig = rigs("ict/identity000.obj", "medium")
+    share = 1.0 - rig.weights[:, rig.skeleton.names.index("neck")]
+    _, i = cKDTree(rig.vertices).query(Q)
+    assert share[i].min() >= 0.6, share[i]
+
+
 def test_head_share_passes_under_the_jaws_angle():
     """Given the gonions, the boundary runs from the pivot under the jaw's angle and along the
     mandible's lower border to under the chin: the angle turns with the head whole (without them,

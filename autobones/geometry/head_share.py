@@ -88,7 +88,7 @@ def mask_distance(C, mask, bound):
 
 def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band=HEAD_BAND,
                neck_base=NECK_BASE, neck_rise=NECK_RISE, cut=None, keep_chin=False, chin_base=False,
-               jaw_angle=None):
+               jaw_angle=None, angle_estimated=False):
     """The head's share of each vertex (module docstring): (n,) in [0, 1].
 
     Parameters
@@ -132,6 +132,12 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         also passes ``ANGLE_MARGIN`` half-bands under the angle and from there along the mandible's
         lower border to under the chin, so the angle turns with the head (:func:`_under_jaw`); under
         a low angle the share rises from the neck base's top.
+    angle_estimated : bool
+        ``jaw_angle`` is an estimate (``place``'s, from the proportions of human heads), not a landmark:
+        the boundary under it stays two half-bands above the neck base, so the share is 0 a half-band
+        above the base. Down to the base itself (a landmark's angle may lie there), a short neck under a
+        low estimate turned its base by 2.6-7.7 % of the peak motion on a head turn in the frame of the
+        head's landmarks (the SMPL man's, cut 0.1 head sizes under his angle: the zoo's check 3).
     chin_base : bool
         The face's share rises from under the chin (``chin``'s height less ``CHIN_MARGIN``, or the
         neck base when that is lower) to whole at the chin, never inside the lowest ``neck_base`` of
@@ -151,7 +157,7 @@ def head_share(C, joint, faces=None, chin=None, face_only=False, face=None, band
         # which is then the lower half of the neck under the chin, the rest of it bending
         base = max(lowest, min(base, lowest + DENSE_BASE * (chin[0] - lowest)))
     half = max(min(band, BAND_SHARE * (yj - base)), 1e-6)
-    across = _across(y, z, yj, zj, chin, jaw_angle, half)
+    across = _across(y, z, yj, zj, chin, jaw_angle, half, floor=base + 2.0 * half if angle_estimated else -np.inf)
     face_base = face is not None and chin_base and chin is not None and not face_only
     slant, slant_face = _cut_rises(C, joint, None if face_only else cut, float(np.ptp(used)), neck_base, neck_rise,
                                    chin if face_base else None)
@@ -206,7 +212,7 @@ def _cut_rises(C, joint, cut, height, neck_base, neck_rise, chin=None):
     return slant, smoothstep((above - l0) / max(chin_above - l0, CHIN_MARGIN / 4))
 
 
-def _across(y, z, yj, zj, chin, jaw_angle, half):
+def _across(y, z, yj, zj, chin, jaw_angle, half, floor=-np.inf):
     """(n,) each point's signed distance from the boundary in the midline plane (``y`` height, ``z``
     depth; positive above it), so the band is ``half`` wide across the boundary everywhere: measured
     vertically, it thinned where the boundary falls steeply (in front of the pivot, down to under the
@@ -217,14 +223,17 @@ def _across(y, z, yj, zj, chin, jaw_angle, half):
     rounded (softplus). Given the ``jaw_angle`` too, it runs no higher than :func:`_under_jaw`: a line
     from the pivot to the chin passed over the mandible's angle (gonion share 0.0-0.45 on 26 of the 27
     landmarked shared heads), which then stayed with the neck and the jaw folded along its border on a
-    head turn. The curve is sampled every ``half / 40`` along its length (one k-d tree query per point)."""
+    head turn. That piece runs no lower than ``floor`` (height). The curve is sampled every ``half / 40``
+    along its length (one k-d tree query per point)."""
     slope = 1.0
     if chin is not None:
         slope = float(np.clip((yj - (chin[0] - CHIN_MARGIN)) / max(chin[1] - zj, ROUND), -2.0, 2.0))
 
     def height(zz):
         b = yj - slope * ROUND * np.logaddexp(0.0, (zz - zj) / ROUND)
-        return b if jaw_angle is None or chin is None else np.minimum(b, _under_jaw(zz, yj, zj, jaw_angle, chin, half))
+        if jaw_angle is None or chin is None:
+            return b
+        return np.minimum(b, np.maximum(_under_jaw(zz, yj, zj, jaw_angle, chin, half), floor))
 
     # the curve sampled evenly along its length (a steep stretch sampled evenly in depth left gaps)
     zz = np.arange(float(z.min()) - 4.0 * half, float(z.max()) + 4.0 * half, half / 400.0)

@@ -39,7 +39,8 @@ CHUNK = 65536
 
 
 def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, faces=None, band=FACIAL_BAND,
-                     chin=None, face_only=False, prune=0.01, cut=None, no_neck=False, chin_base=False):
+                     chin=None, face_only=False, prune=0.01, cut=None, no_neck=False, chin_base=False,
+                     jaw_angle=None):
     """Restrict bone-heat weights to stay local (module docstring); in place, and returned.
 
     Parameters
@@ -61,7 +62,7 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
         stray loose vertex does not move the neck base).
     band : float
         Blend band around the facial mask, head sizes.
-    chin, face_only, cut, chin_base
+    chin, face_only, cut, chin_base, jaw_angle
         The boundary's and the neck base's options, see
         :func:`autobones.geometry.head_share.head_share`.
     prune : float
@@ -99,7 +100,8 @@ def restrict_weights(C, W, facial_mask, joint, neck=0, head=1, facial=None, face
     # 2. the head's share (head and facial bones) from the boundary through the pivot, and all of the
     # face and its band (a long muzzle hangs below any plane through the pivot); the rest is neck
     share = np.ones(n) if no_neck else head_share(C, joint, faces=faces, chin=chin, face_only=face_only,
-                                                  face=hold, cut=cut, chin_base=chin_base)
+                                                  face=hold, cut=cut, chin_base=chin_base, jaw_angle=jaw_angle,
+                                                  angle_estimated=True)
     if faces is not None and not no_neck:
         # the bands are head sizes: on a coarse neck one spans a single long edge, a step of the whole
         # head/neck split across it (as transfer's rigs, :mod:`autobones.rig_transfer.neck`)

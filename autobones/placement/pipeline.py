@@ -31,6 +31,7 @@ from .skin_weights import PROXY_ABOVE, PROXY_VERTICES, WELD_TOL, bone_heat_weigh
 log = logging.getLogger("autobones")
 
 NO_NECK = 0.01   # head sizes: a menton this close to the lowest vertex has no neck under it (_no_neck)
+ANGLE_SHARE = (0.42, 0.15)   # the jaw's angle between the menton and the head joint: height, depth (jaw_angle)
 
 
 def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
@@ -163,8 +164,32 @@ def _local_weights(C, F, skel_c, proxy, seg, frame):
     restrict_weights(C, W, seg.facial_mask, seg.head_bone[0], neck=0, head=1, faces=F,
                      chin=(joints.menton, joints.chin_front), face_only="face_only" in joints.cues["head"],
                      cut=frame.cut, no_neck="no_neck" in joints.cues["neck"],
-                     chin_base=joints.menton_source == "chin")
+                     chin_base=joints.menton_source == "chin",
+                     jaw_angle=jaw_angle(seg.head_bone[0], joints.menton, joints.chin_front))
     return W
+
+
+def jaw_angle(joint, menton, chin_front):
+    """The jaw's angle (height, depth), canonical head sizes, where human heads put it between the head
+    joint ``joint`` (3,) and the chin (``menton`` height, ``chin_front`` depth): ``ANGLE_SHARE`` of the way
+    up from the menton to the joint, and of the way forward from the joint to the chin's front; None
+    when the chin is not below and in front of the joint.
+
+    ``place`` has no landmark for the gonions. Their proportions on eight human heads (the SMPL man's
+    and woman's hand-placed gonions, and where the generic rig's landed on ICT 000-002, James, the
+    menpo3d template and Lee Perry-Smith, each against ``place``'s own joint and chin): 0.38-0.52 of
+    the height (median 0.42) and 0.16-0.54 of the depth. The straight line from the joint to the chin
+    passed 0.05-0.10 head sizes over them, so the angle stayed with the neck on a head turn (the SMPL
+    woman's head share 0.14 there) and the jaw folded along its lower border. The depth taken is the
+    range's back end: the boundary passes under it and from there along the border to the chin, so
+    under the angles further forward too (`benchmarks/head_turn.py`: the median of the height and 0.40
+    of the depth left the woman's angle at 0.56 and strained more edges on the menpo3d template and
+    the robot).
+    """
+    dy, dz = float(joint[1]) - menton, chin_front - float(joint[2])
+    if not (dy > 0 and dz > 0):
+        return None
+    return menton + ANGLE_SHARE[0] * dy, float(joint[2]) + ANGLE_SHARE[1] * dz
 
 
 def _no_neck(C, F, joints, frame):
