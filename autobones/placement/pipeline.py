@@ -182,9 +182,9 @@ def jaw_angle(joint, menton, chin_front):
     passed 0.05-0.10 head sizes over them, so the angle stayed with the neck on a head turn (the SMPL
     woman's head share 0.14 there) and the jaw folded along its lower border. The depth taken is the
     range's back end: the boundary passes under it and from there along the border to the chin, so
-    under the angles further forward too (`benchmarks/head_turn.py`: the median of the height and 0.40
-    of the depth left the woman's angle at 0.56 and strained more edges on the menpo3d template and
-    the robot).
+    under the angles further forward too (`benchmarks/head_turn.py`, the boundary down to two
+    half-bands under the estimate as under a landmark's: the woman's angle 0.56 at the median depth
+    0.40, 0.76 at 0.15; ``head_share``'s ``angle_estimated`` keeps it above the neck base, 0.44).
     """
     dy, dz = float(joint[1]) - menton, chin_front - float(joint[2])
     if not (dy > 0 and dz > 0):
