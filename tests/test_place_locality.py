@@ -216,6 +216,18 @@ def test_head_share_passes_under_the_jaws_angle():
     assert at(low, -0.38, -0.08) > 0.6 > at(without, -0.38, -0.08) and low[grid[:, 1] <= -0.45].max() == 0.0
 
 
+def test_head_share_with_a_pivot_on_the_neck_base_stays_bounded():
+    """A pivot a ten-millionth of the head above the lowest vertex makes the blend a millionth wide; the
+    boundary's curve, sampled at a fraction of that band, asked for billions of points and the process
+    was killed. The samples are capped: the share comes back whole, finite and in [0, 1]."""
+    from autobones.geometry.head_share import head_share
+
+    C = np.random.default_rng(0).normal(size=(2000, 3)) * 0.3
+    joint = np.array([0.0, C[:, 1].min() + 1e-7, 0.0])
+    share = head_share(C, joint, chin=(joint[1] - 0.1, 0.2), jaw_angle=(joint[1] - 0.05, 0.05))
+    assert share.shape == (2000,) and np.isfinite(share).all() and 0.0 <= share.min() <= share.max() <= 1.0
+
+
 def test_head_share_band_is_as_wide_where_the_boundary_falls_steeply():
     """The head/neck blend is as wide across the boundary where it falls steeply (in front of the pivot,
     down to under a low jaw angle) as it is behind the pivot, where it is level: measured vertically,

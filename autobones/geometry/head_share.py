@@ -49,6 +49,7 @@ CHIN_MARGIN = 0.05   # head sizes: the boundary passes this far under the chin
 ANGLE_MARGIN = 2.0   # half-bands: the boundary passes this far under the jaw's angle (0.8-1 there after smoothing)
 ROUND = 0.05         # head sizes: the boundary's bend at the pivot is rounded over this depth
 OPEN_FACE = 0.22     # vector area / area above which a forward-facing open shell is a face mask
+SAMPLES = 200_000    # at most this many points along the boundary's curve (_across)
 SMOOTH_RINGS = 6     # Jacobi steps of :func:`smooth_share`: every band at least a few edges wide
 DENSE_BASE = 0.5     # of the neck under the chin: its still base where the lowest vertices reach the chin
 STILL = 0.01         # a share this low moves a vertex by at most about 1% of a head turn's peak: kept
@@ -235,11 +236,14 @@ def _across(y, z, yj, zj, chin, jaw_angle, half, floor=-np.inf):
             return b
         return np.minimum(b, np.maximum(_under_jaw(zz, yj, zj, jaw_angle, chin, half), floor))
 
-    # the curve sampled evenly along its length (a steep stretch sampled evenly in depth left gaps)
-    zz = np.arange(float(z.min()) - 4.0 * half, float(z.max()) + 4.0 * half, half / 400.0)
+    # the curve sampled evenly along its length (a steep stretch sampled evenly in depth left gaps); the
+    # samples capped at ``SAMPLES``: a band a millionth of the head wide (a pivot on the neck base's top)
+    # asked for billions, which no shared head's band comes near (head sizes 0.03-0.1: 2,000-20,000)
+    lo, hi = float(z.min()) - 4.0 * half, float(z.max()) + 4.0 * half
+    zz = np.arange(lo, hi, max(half / 400.0, (hi - lo) / SAMPLES))
     curve = np.column_stack([zz, height(zz)])
     length = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))]
-    at = np.arange(0.0, length[-1], half / 40.0)
+    at = np.arange(0.0, length[-1], max(half / 40.0, length[-1] / SAMPLES))
     curve = np.column_stack([np.interp(at, length, curve[:, 0]), np.interp(at, length, curve[:, 1])])
     d, _ = cKDTree(curve).query(np.column_stack([z, y]))
     return np.where(y >= height(z), d, -d)
