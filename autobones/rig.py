@@ -304,14 +304,14 @@ class Rig:
 
     def turn_bones(self, head_deg=None, neck_deg=None, axes=None):
         """Vertices (n, 3), input frame and units, with the ``head`` and ``neck`` bones turned by
-        (pitch, yaw, roll) degrees about +X, +Y, +Z of the head frame at their joints and every bone
-        under them carried along, by linear blend skinning with the rig's own weights (what a glTF
-        player does): how any rig, ``place``'s included, turns. All zero: the vertices, exactly.
-        ``axes``: (3, 3) rows left, up, front the angles are about instead of the rig frame's (a
-        ``transfer`` rig's landmarks' anatomical frame, :func:`autobones.rig_transfer.neck.anatomical_axes`)."""
+        (pitch, yaw, roll) degrees about the head's left, up and front (:attr:`autobones.orient.Frame.turn_axes`:
+        a ``transfer`` rig's landmarks' anatomical axes) at their joints and every bone under them carried
+        along, by linear blend skinning with the rig's own weights (what a glTF player does): how any rig,
+        ``place``'s included, turns. All zero: the vertices, exactly. ``axes``: (3, 3) rows left, up,
+        front the angles are about instead."""
         from .expressions.bones import blend_bones, bone_transforms
 
-        R = self.frame.rotation if axes is None else np.asarray(axes, dtype=np.float64)
+        R = self.frame.turn_axes if axes is None else np.asarray(axes, dtype=np.float64)
         origin, size = self.frame.origin, self.frame.size
         V = np.asarray(self.vertices, dtype=np.float64)
         C = (V - origin) @ R.T / size
@@ -431,7 +431,7 @@ class Rig:
                 write_glb(temps[0], self.vertices, self.faces, self.skeleton, self.weights,
                           extras={"autobones": {"sidecar": os.path.basename(json_path)}},
                           markers=self.muscle_markers(), morph_targets=morphs,
-                          axes=self.frame.rotation)  # the joints' roll from the head's own frame
+                          axes=self.frame.turn_axes)  # the joints' roll from the head's own axes
                 with open(temps[1], "w") as fh:
                     fh.write(strict_dumps(side, indent=1))  # strict JSON: an undefined value is null, never NaN
                 with open(temps[2], "wb") as fh:

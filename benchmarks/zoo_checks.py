@@ -18,7 +18,6 @@ import numpy as np
 from autobones.arkit.folds import ON_TOP, folded_triangles
 from autobones.arkit.lids import eye_sides, gap_closure
 from autobones.geometry.closest import closest_points
-from autobones.geometry.rotations import axis_rotation
 from autobones.geometry.topology import used_vertices
 from autobones.io.landmark_names import mirror_name
 from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges
@@ -309,15 +308,10 @@ def check_jaw(rig, lm, given=None):
 # ------------------------------------------------------------------------------------- check 3
 def head_turn_motion(rig, deg=TURN_DEG):
     """Per-vertex displacement (n,) of a ``deg`` yaw of the ``head`` bone (and its children) about
-    the rig's own up at the head joint, linear blend skinning (what ``pose --head 0,deg,0`` and a
-    glTF player do with the skin weights)."""
-    sk = rig.skeleton
-    w = rig.weights[:, family(sk, "head")].sum(axis=1)
-    rot = rig.frame.rotation
-    M = rot.T @ axis_rotation(1, deg) @ rot   # canonical +Y yaw, in the input frame
-    c = sk.heads[sk.names.index("head")]
-    X = rig.vertices - c
-    return w * np.linalg.norm(X @ (M - np.eye(3)).T, axis=1)
+    the rig's own up at the head joint (``Rig.turn_bones``: the head's axes, a transferred rig's
+    anatomical ones), linear blend skinning (what ``pose --head 0,deg,0`` and a glTF player do with
+    the skin weights)."""
+    return np.linalg.norm(rig.turn_bones(head_deg=(0.0, float(deg), 0.0)) - np.asarray(rig.vertices), axis=1)
 
 
 def chin_height(lm, up):

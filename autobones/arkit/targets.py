@@ -56,7 +56,8 @@ MOUTH = ("cheilion_r", "stomion", "cheilion_l", "labiale_superius", "labiale_inf
 def eye_turn(name, frame_rotation):
     """Rotation (3, 3) of the eyeball for eyeLook ``name`` at weight 1, in the input frame.
 
-    ``frame_rotation``: rows are the canonical +X, +Y, +Z in the input frame (:class:`autobones.orient.Frame`).
+    ``frame_rotation``: rows are the head's left, up and front in the input frame
+    (:attr:`autobones.orient.Frame.turn_axes`: a transferred rig's anatomical axes).
     """
     side = "Left" if name.endswith("Left") else "Right"
     way = name[len("eyeLook"):-len(side)]
@@ -443,7 +444,7 @@ def _turn_eyeballs(rig, V, by_name, eyes):
             if eye in eyes and name in by_name:  # a set without the shape leaves it absent (all zero)
                 m = eyes[eye]
                 c = rig.skeleton.heads[names_b.index(eye)]
-                R = eye_turn(name, rig.frame.rotation)
+                R = eye_turn(name, rig.frame.turn_axes)
                 by_name[name] = by_name[name].copy()
                 by_name[name][m] = (V[m] - c) @ R.T + c - V[m]
                 turned.add(name)

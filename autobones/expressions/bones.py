@@ -77,7 +77,7 @@ def _eye_rotation(eye_pivot, base, look_at, gaze):
     return None
 
 
-def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, parents=None):
+def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, parents=None, basis=None):
     """World transforms of the bones that move: bone index -> (R (3, 3), t (3,)), x -> R x + t.
 
     Parameters
@@ -97,6 +97,10 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, p
     parents : list of int, optional
         Each bone's parent (-1 for a root): every other bone under the head (``place``'s facial
         bones) then moves with the head, and under the neck alone with the neck.
+    basis : (3, 3) float, optional
+        Rows: the left, up and front the head, neck and gaze angles are about, in the canonical frame
+        (a transferred rig's anatomical axes, :attr:`autobones.orient.Frame.turn_axes`, where its
+        canonical frame leans with the face); default the canonical axes.
 
     Raises AutobonesError when a control needs a bone the rig lacks.
     """
@@ -108,15 +112,20 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, p
         if name not in names:
             raise AutobonesError(f"{what}: the rig has no {name!r} bone")
 
+    def about(R):   # a rotation about the basis' axes, in canonical coordinates
+        return R if basis is None else basis.T @ R @ basis
+
+    if basis is not None:
+        basis = np.asarray(basis, dtype=np.float64)
     world = {}
     base = (np.eye(3), np.zeros(3))
     if neck_deg is not None and np.any(np.asarray(neck_deg, dtype=float)):
         need("neck", "neck_deg")
-        base = local("neck", euler_rotation(neck_deg))
+        base = local("neck", about(euler_rotation(neck_deg)))
         world["neck"] = base
     if head_deg is not None and np.any(np.asarray(head_deg, dtype=float)):
         need("head", "head_deg")
-        Rh, th = local("head", euler_rotation(head_deg))
+        Rh, th = local("head", about(euler_rotation(head_deg)))
         base = (base[0] @ Rh, base[0] @ th + base[1])
     if "head" in names and (np.any(base[0] != np.eye(3)) or np.any(base[1])):
         world["head"] = base
@@ -133,6 +142,8 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, p
         if look_at is not None or gazing:
             need(eye, "look_at" if look_at is not None else "gaze")
             Re = _eye_rotation(pivots[names.index(eye)], base, look_at, gaze)
+            if Re is not None and look_at is None:
+                Re = about(Re)   # a gaze's yaw and pitch are about the head's axes; an aim is a point
         if Re is not None:
             Rl, tl = local(eye, Re)
             world[eye] = (base[0] @ Rl, base[0] @ tl + base[1])

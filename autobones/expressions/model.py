@@ -161,6 +161,9 @@ class ExpressionModel:
         types = muscle_types(self.doc_)
         inputs = rig_inputs(rig)
         frame = self.frame_ = rig.frame
+        # head, neck and gaze angles are about the head's anatomical axes where the canonical frame leans
+        axes = getattr(frame, "axes", None)
+        self.turn_basis_ = None if axes is None else np.asarray(axes, dtype=np.float64) @ frame.rotation.T
         self.vertices_ = np.asarray(rig.vertices, dtype=np.float64)
         V = self.canonical_ = frame.to_canonical(self.vertices_)
         # the skull lies under the skin along its normals: a rig of a head written inside out keeps the
@@ -494,5 +497,6 @@ class ExpressionModel:
             d = unfold_folds(d, V, self.surface_, float(self.params_["unfold_reach"]) * self.face_unit_)
         if look_at is not None:
             look_at = self.frame_.to_canonical(np.asarray(look_at, dtype=np.float64).reshape(1, 3))[0]
-        moves = bone_transforms(self.bones_, self.pivots_, 0.0, gaze, look_at, head_deg, neck_deg)
+        moves = bone_transforms(self.bones_, self.pivots_, 0.0, gaze, look_at, head_deg, neck_deg,
+                                basis=getattr(self, "turn_basis_", None))
         return blend_bones(d, V, self.jaw_weights_, moves)

@@ -136,18 +136,25 @@ def check_finite_tree(x, key):
 # the sidecar
 
 def check_frame(d, key="frame"):
-    """The sidecar's ``frame``: a 3x3 rotation (orthonormal, det +1), an origin, ``head_size`` > 0."""
+    """The sidecar's ``frame``: a 3x3 rotation (orthonormal, det +1), an origin, ``head_size`` > 0, and
+    optionally ``axes`` (the head's anatomical axes, a rotation too)."""
     mapping(d, key)
-    R = d.get("rotation")
-    if not isinstance(R, list) or len(R) != 3:
-        raise SchemaError(f"{key}.rotation is {_kind(R)}, expected 3 rows of 3 numbers")
-    R = np.array([vector(row, f"{key}.rotation[{i}]") for i, row in enumerate(R)])
-    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
-        raise SchemaError(f"{key}.rotation is not a rotation (its rows are not orthonormal, right-handed)")
+    _rotation(d.get("rotation"), f"{key}.rotation")
+    if d.get("axes") is not None:
+        _rotation(d["axes"], f"{key}.axes")
     vector(d.get("origin"), f"{key}.origin")
     number(d.get("head_size"), f"{key}.head_size", above=0.0)
     if d.get("symmetry_error") is not None:
         number(d["symmetry_error"], f"{key}.symmetry_error", low=0.0)
+
+
+def _rotation(R, key):
+    """``R``: 3 rows of 3 numbers, orthonormal and right-handed (a sidecar's rotation)."""
+    if not isinstance(R, list) or len(R) != 3:
+        raise SchemaError(f"{key} is {_kind(R)}, expected 3 rows of 3 numbers")
+    R = np.array([vector(row, f"{key}[{i}]") for i, row in enumerate(R)])
+    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise SchemaError(f"{key} is not a rotation (its rows are not orthonormal, right-handed)")
 
 
 def check_bones(bones):

@@ -32,6 +32,7 @@ from ..geometry.head_share import (STILL, apply_head_share, face_only, head_shar
                                    smooth_share)
 from ..geometry.smooth import smoothstep
 from ..orient import SHELL, SKIN_LEAD, SPREAD
+from ..orient import anatomical_axes as _anatomical_axes  # the wrapper below keeps its fallback
 from ..geometry.topology import used_vertices, without_large_parts
 
 FACE_HOLD = 0.16   # head sizes: the face keeps the head's whole share this far out (place's 2 x 0.08)
@@ -115,35 +116,13 @@ def jaw_angle_points(landmarks, fitted=None):
 
 
 def anatomical_axes(V, F, landmarks, rotation):
-    """(3, 3) rows left, up, front of the landmarks' anatomical frame, else ``rotation`` (3, 3).
-
-    Front from the back of the head (opisthocranion, else the tragions' midpoint, else the
-    centroid) to the pronasale; up from the chin (menton, else pogonion) to the top (vertex, else
-    nasion) made orthogonal to that front. The rig's own frame takes menton -> vertex as up, which
-    leans with the face: 16 degrees on the generic rig, 36-73 on the zoo's animals (a long snout
-    puts the menton far ahead of the vertex), where its "lowest" vertices were the back of the
-    skull and its level boundary behind the pivot cut through the nape.
-    """
-    def pick(names):   # the first of ``names`` the landmarks have, or None
-        return next((np.asarray(landmarks[n], dtype=np.float64) for n in names if n in landmarks), None)
-
-    nose, top, bottom = pick(("pronasale",)), pick(("vertex", "nasion")), pick(("menton", "pogonion"))
-    if nose is None or top is None or bottom is None:
-        return rotation
-    back = pick(("opisthocranion",))
-    if back is None and "tragion_l" in landmarks and "tragion_r" in landmarks:
-        back = 0.5 * (np.asarray(landmarks["tragion_l"], dtype=np.float64) + np.asarray(landmarks["tragion_r"]))
-    if back is None:
-        back = np.asarray(V, dtype=np.float64)[used_vertices(F, len(V))].mean(axis=0)
-    front, up = nose - back, top - bottom
-    if np.linalg.norm(front) == 0:
-        return rotation
-    front = front / np.linalg.norm(front)
-    up = up - (up @ front) * front
-    if np.linalg.norm(up) < 1e-6 * np.linalg.norm(top - bottom) or up @ rotation[1] <= 0:
-        return rotation
-    up /= np.linalg.norm(up)
-    return np.vstack([np.cross(up, front), up, front])
+    """(3, 3) rows left, up, front of the landmarks' anatomical frame
+    (:func:`autobones.orient.anatomical_axes`), else ``rotation`` (3, 3): where they lack the names, or
+    their up points away from ``rotation``'s. ``transfer``'s frame leans with the face (its rotation's
+    up is menton -> vertex: 16 degrees on the generic rig, 36-73 on the zoo's animals), where the
+    "lowest" vertices were the back of the skull and a level boundary behind the pivot cut the nape."""
+    R = _anatomical_axes(V, F, landmarks)
+    return rotation if R is None or R[1] @ rotation[1] <= 0 else R
 
 
 def _descends(parents, i, ancestor):
