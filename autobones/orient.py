@@ -109,7 +109,8 @@ class Frame:
         ``rotation``'s: a transferred rig's, from its landmarks (:func:`anatomical_axes`), whose
         ``rotation`` takes up along menton -> vertex (the frame its generic rig's expression model,
         jaw glide and mouth parts are set in) and so leans 6-73 degrees with the face. None: the
-        rotation's own. The bones turn about :attr:`turn_axes` and are exported with their roll.
+        rotation's own. The head, neck and eyes turn about :attr:`turn_axes`, and the exported
+        joints take their roll (their +X) from its left.
     """
 
     rotation: np.ndarray
@@ -360,13 +361,13 @@ def frame_from_landmarks(V, F, landmarks):
     bottom one, front from the mesh's centroid to the nose (or another front midline landmark),
     left completing the frame; the symmetry plane through the midline landmarks and the midpoints
     of the bilateral pairs; and the head's anatomical axes (:func:`anatomical_axes`) as
-    :attr:`Frame.axes`, which the bones turn about and are exported with.
+    :attr:`Frame.axes`, which the head, neck and eyes turn about.
 
     Up along menton -> vertex leans with the face (23-73 degrees off the anatomical up on the zoo's
     animals and the SMPL bodies, 6-24 on ICT's heads, more with the jaw open): the rig's own
     computations run in it (the generic rig's expression model, jaw glide and mouth parts are set
     in it), but a head turned about it also rolled (its eyes 0.10-0.25 ex-ex out of level on a 15
-    degree turn) and its bones' local axes in the glb leaned as much.
+    degree turn), and an ARKit eyeLookIn / Out, a capture's HeadYaw and the viewer's sliders with it.
 
     Left is derived without the bilateral names, so a set with left and right swapped is
     caught by :func:`autobones.io.landmarks.validate_landmarks`. Returns None when the

@@ -339,7 +339,7 @@ def test_transfer_rigs_a_head_with_a_stray_triangle(tmp_path):
 def test_a_transferred_rig_turns_its_head_about_its_anatomical_up():
     """Issue #32 (bone axes): ``transfer``'s frame takes its up from menton -> vertex, which leans with
     the face (the cow's 62 degrees), and the head turned about it: a 15 degree turn rolled the head
-    (its eyes 0.22 ex-ex out of level) and the bones' local axes in the glb leaned as much. The head
+    (its eyes 0.22 ex-ex out of level) in ``pose``, ``turn_bones`` and ``animate``. The head
     now turns about its anatomical axes (``Frame.turn_axes``: up across the line from the back of the
     skull to the nose), by its bones and by the expression model's pose alike, and that up agrees with
     the one ``place`` finds from the shape alone (83 degrees apart before)."""

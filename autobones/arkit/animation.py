@@ -87,10 +87,12 @@ def capture_glb(rig_path, capture, bones=True):
     if bones and capture.angles:
         json_path = sidecar_paths(rig_path)[0]
         try:
-            Rf = np.asarray(read_json(json_path, "sidecar")["frame"]["rotation"], dtype=np.float64)
+            frame = read_json(json_path, "sidecar")["frame"]
+            # the head's axes (a transferred rig's anatomical ones, Frame.axes), else its frame's
+            Rf = np.asarray(frame.get("axes") or frame["rotation"], dtype=np.float64)
         except AutobonesError:  # read_json's own message, naming the file
             raise
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
             raise AutobonesError(f"{json_path}: the rig's sidecar is needed for the head and eye turns "
                                  f"({type(exc).__name__}: {exc}); or animate without them (--no-bones)") from None
         world, parent = _world_rotations(nodes)

@@ -63,7 +63,8 @@ def thumbnail_png(glb_path, size=160):
     fr = read_sidecar(glb_path).get("frame") or {}
     try:
         frame = Frame.from_dict(fr)
-        V = frame.to_canonical(P)  # the renderer's views are named in the canonical head frame
+        # the renderer's views are named in the head's axes (a transferred rig's anatomical ones)
+        V = (P - frame.origin) @ frame.turn_axes.T / frame.size
     except (KeyError, TypeError, ValueError):
         V = P - P.mean(axis=0) if len(P) else P
     colors = None

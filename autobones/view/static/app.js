@@ -113,9 +113,10 @@ async function showRig(rel, fromBatch) {
                                                    side: THREE.DoubleSide });
   mesh.frustumCulled = false;  // a posed skin leaves its rest bounding box
 
-  // the head frame: rows of frame.rotation are canonical +X (left), +Y (up), +Z (front) in the file's frame
+  // the head's axes: rows are its left, up and front in the file's frame (frame.axes, a transferred rig's
+  // anatomical axes; else the rows of frame.rotation, canonical +X, +Y, +Z)
   const fr = facts.frame || {};
-  const R = fr.rotation || [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
+  const R = fr.axes || fr.rotation || [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
   const axes = R.map((r) => new THREE.Vector3(...r).normalize());
   const canon = new THREE.Quaternion().setFromRotationMatrix(new THREE.Matrix4().makeBasis(axes[0], axes[1], axes[2]));
   scene.updateMatrixWorld(true);
