@@ -54,8 +54,8 @@ from .geometry.sample import sample_surface
 from .geometry.topology import used_vertices, without_large_parts
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
-__all__ = ["Frame", "anatomical_axes", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis", "reflect",
-           "default_reference", "SAMPLE_COUNT"]
+__all__ = ["Frame", "anatomical_axes", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis",
+           "reflect", "default_reference", "SAMPLE_COUNT"]
 
 AXES = {
     "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),

@@ -82,7 +82,7 @@ def bone_rotations(skeleton, axes=None):
         Heads and tails in the mesh's frame and units.
     axes : (3, 3) float or None
         Rows: the head's canonical +X (subject's left), +Y (up), +Z (front) as unit vectors in
-        the mesh's frame (``Frame.rotation``); None takes the mesh's own x, y, z.
+        the mesh's frame (``Frame.turn_axes``); None takes the mesh's own x, y, z.
         A zero-length bone points along +Y of this frame.
 
     Returns
@@ -340,7 +340,7 @@ def write_glb(path, V, F, skeleton, W, max_influences=4, extras=None, markers=()
         applies them before skinning. None given: the file is exactly as without them.
     axes : (3, 3) float or None
         Rows: the head's canonical +X (subject's left), +Y (up), +Z (front) in the frame of ``V``
-        (``Frame.rotation``); they set the joints' roll (:func:`bone_rotations`). None: the
+        (``Frame.turn_axes``); they set the joints' roll (:func:`bone_rotations`). None: the
         frame's own x, y, z (right for a head stored +Y up, facing +Z).
     """
     data = glb_bytes(V, F, skin=skin_for(skeleton, W, max_influences, markers, axes), extras=extras,
