@@ -108,8 +108,8 @@ class Frame:
         The head's anatomical axes (rows left, up, front, input frame) where they differ from
         ``rotation``'s: a transferred rig's, from its landmarks (:func:`anatomical_axes`), whose
         ``rotation`` takes up along menton -> vertex (the frame its generic rig's expression model,
-        jaw glide and mouth parts are set in) and so leans 6-73 degrees with the face. None: the
-        rotation's own. The head, neck and eyes turn about :attr:`turn_axes`, and the exported
+        jaw glide and mouth parts are set in) and so leans with the face (23-73 degrees on the zoo's
+        animals and bodies). None: the rotation's own (no landmark marks the back of the head). The head, neck and eyes turn about :attr:`turn_axes`, and the exported
         joints take their roll (their +X) from its left.
     """
 
@@ -323,9 +323,10 @@ BOTTOM = ("menton", "pogonion", "labiale_inferius", "stomion", "subnasale")
 FRONT = ("pronasale", "nasion", "stomion", "subnasale", "glabella")
 
 
-def anatomical_axes(V, F, landmarks):
+def anatomical_axes(V, F, landmarks, centroid_back=True):
     """(3, 3) rows left, up, front of the landmarks' anatomical frame, or None when they lack the
-    pronasale, a top (vertex, else nasion) or a chin (menton, else pogonion), or these are degenerate.
+    pronasale, a top (vertex, else nasion) or a chin (menton, else pogonion), or these are degenerate,
+    or (``centroid_back`` False) a back of the head.
 
     Front from the back of the head (opisthocranion, else the tragions' midpoint, else the centroid of
     the used vertices of ``V`` (n, 3) under ``F`` (m, 3)) to the pronasale; up from the chin to the top
@@ -343,6 +344,8 @@ def anatomical_axes(V, F, landmarks):
     back = pick(("opisthocranion",))
     if back is None and "tragion_l" in landmarks and "tragion_r" in landmarks:
         back = 0.5 * (np.asarray(landmarks["tragion_l"], dtype=np.float64) + np.asarray(landmarks["tragion_r"]))
+    if back is None and not centroid_back:
+        return None
     if back is None:
         back = np.asarray(V, dtype=np.float64)[used_vertices(F, len(V))].mean(axis=0)
     front, up = nose - back, top - bottom
@@ -360,14 +363,18 @@ def frame_from_landmarks(V, F, landmarks):
     """The canonical frame from landmarks, when they tell it: up from a top midline landmark to a
     bottom one, front from the mesh's centroid to the nose (or another front midline landmark),
     left completing the frame; the symmetry plane through the midline landmarks and the midpoints
-    of the bilateral pairs; and the head's anatomical axes (:func:`anatomical_axes`) as
-    :attr:`Frame.axes`, which the head, neck and eyes turn about.
+    of the bilateral pairs; and, where the landmarks mark the back of the head (the opisthocranion or
+    both tragions), the head's anatomical axes (:func:`anatomical_axes`) as :attr:`Frame.axes`, which
+    the head, neck and eyes turn about.
 
     Up along menton -> vertex leans with the face (23-73 degrees off the anatomical up on the zoo's
-    animals and the SMPL bodies, 6-24 on ICT's heads, more with the jaw open): the rig's own
-    computations run in it (the generic rig's expression model, jaw glide and mouth parts are set
-    in it), but a head turned about it also rolled (its eyes 0.10-0.25 ex-ex out of level on a 15
-    degree turn), and an ARKit eyeLookIn / Out, a capture's HeadYaw and the viewer's sliders with it.
+    animals and the SMPL bodies, whose files mark the back of the head): the rig's own computations
+    run in it (the generic rig's expression model, jaw glide and mouth parts are set in it), but a
+    head turned about it also rolled (its eyes 0.10-0.25 ex-ex out of level on a 15 degree turn), and
+    an ARKit eyeLookIn / Out, a capture's HeadYaw and the viewer's sliders with it. Without a back,
+    the mesh's centroid stands in badly where a neck or a bust hangs below the head (a held-out
+    woman's head with a long neck and the 27 names the detector finds: 15 degrees off her upright
+    model, menton -> nasion 4), so the axes are the rotation's own.
 
     Left is derived without the bilateral names, so a set with left and right swapped is
     caught by :func:`autobones.io.landmarks.validate_landmarks`. Returns None when the
@@ -399,7 +406,7 @@ def frame_from_landmarks(V, F, landmarks):
     x0 = float(np.median(np.array(mids) @ left))
     origin = centroid - (centroid @ left - x0) * left
     local = (V[used] - origin) @ R.T
-    axes = anatomical_axes(V, F, landmarks)
+    axes = anatomical_axes(V, F, landmarks, centroid_back=False)
     if axes is not None and axes[1] @ R[1] <= 0:
         axes = None   # landmarks that disagree on which way is up: the rotation's own
     return Frame(rotation=R, origin=origin, size=float(np.ptp(local, axis=0).max()), axes=axes)
