@@ -51,7 +51,7 @@ from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
-from .geometry.topology import used_vertices, without_large_parts
+from .geometry.topology import distinct_faces, used_vertices, without_large_parts
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
 __all__ = ["Frame", "anatomical_axes", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis",
@@ -203,6 +203,10 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     -------
     Frame
     """
+    # a triangle written twice (a double-sided export's back faces) weighs twice in the sample and makes
+    # its edges non-manifold, so no rim reads as a cut: counted once (the SMPL woman with a third of her
+    # triangles repeated stood 99 degrees off)
+    F = distinct_faces(F)
     # the frame is found from the head without large parts beside it (hair, a beard: open shells or
     # closed volumes), which the bald reference overlays badly and whose rims read as cuts
     head = without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)

@@ -19,6 +19,25 @@ def used_vertices(F, n=None):
     return np.flatnonzero(np.bincount(F, minlength=n or 0)) if len(F) else np.zeros(0, dtype=np.int64)
 
 
+def distinct_faces(F):
+    """``F`` ``(m, 3)`` int without its repeated triangles (the same three vertices in any order: a
+    double-sided export's back faces, a triangle written twice), the first of each kept, in order;
+    ``F`` itself when none repeats. Repeats count twice in every area-weighted sample and make each
+    of their edges look non-manifold."""
+    F = np.asarray(F, dtype=np.int64)
+    if len(F) < 2:
+        return F
+    S = np.sort(F, axis=1)
+    order = np.lexsort((S[:, 2], S[:, 1], S[:, 0]))
+    S = S[order]
+    repeat = np.r_[False, (S[1:] == S[:-1]).all(axis=1)]
+    if not repeat.any():
+        return F
+    keep = np.ones(len(F), dtype=bool)
+    keep[order[repeat]] = False   # the stable sort puts the first occurrence first
+    return F[keep]
+
+
 def mesh_edges(F):
     """Unique undirected edges ``(e, 2)`` int64 of triangles ``F`` ``(m, 3)``, with ``i < j``."""
     F = np.asarray(F, dtype=np.int64)
