@@ -109,8 +109,9 @@ class Frame:
         ``rotation``'s: a transferred rig's, from its landmarks (:func:`anatomical_axes`), whose
         ``rotation`` takes up along menton -> vertex (the frame its generic rig's expression model,
         jaw glide and mouth parts are set in) and so leans with the face (23-73 degrees on the zoo's
-        animals and bodies). None: the rotation's own (no landmark marks the back of the head). The head, neck and eyes turn about :attr:`turn_axes`, and the exported
-        joints take their roll (their +X) from its left.
+        animals and bodies). None: the rotation's own (no landmark marks the back of the head).
+        The head, neck and eyes turn about :attr:`turn_axes`, and the exported joints take their roll
+        (their +X) from its left.
     """
 
     rotation: np.ndarray
