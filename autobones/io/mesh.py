@@ -457,15 +457,29 @@ def stray_parts(V, F):
 
 
 def wound_outward(V, F, source=None):
-    """``(F_out, note)``: the triangles ``F`` (m, 3) wound outward for the pipeline's normals, winding
-    numbers and views (:func:`autobones.geometry.winding.outward_faces`), and the sidecar's line saying
-    how many were turned (None when none were; logged once). The rig keeps the input's own ``F``."""
+    """``(F_out, note)``: the triangles ``F`` (m, 3), each once, wound outward for the pipeline's normals,
+    winding numbers and views (:func:`autobones.geometry.winding.outward_faces`), and the sidecar's line
+    saying how many were repeated or turned (None when none were; logged once). The rig keeps the
+    input's own ``F``.
+
+    A triangle written twice (a double-sided export's back faces, a face repeated) is taken once
+    (:func:`autobones.geometry.topology.distinct_faces`): its twin wound the other way made every
+    triangle read as turned, and the repeats weighed twice in the frame's sample, the depth groups and
+    the bone heat (the assimp man double-sided: joints 0.5 head sizes apart, weights up to 1)."""
+    from ..geometry.topology import distinct_faces
     from ..geometry.winding import outward_faces
 
-    F_out, turned = outward_faces(V, F)
-    if not turned:
+    F_once = distinct_faces(F)
+    F_out, turned = outward_faces(V, F_once)
+    parts = []
+    if len(F_once) < len(F):
+        parts.append(f"{len(F) - len(F_once)} of {len(F)} triangles repeat others (a double-sided export?): "
+                     "the head was rigged with each once; its triangles are written as given")
+    if turned:
+        parts.append(f"{turned} of {len(F_once)} triangles wound inward (normals into the head): the head was "
+                     "rigged with them turned outward; its triangles are written as given")
+    if not parts:
         return F_out, None
-    note = (f"{turned} of {len(F)} triangles wound inward (normals into the head): the head was rigged with "
-            "them turned outward; its triangles are written as given")
+    note = "; ".join(parts)
     log.warning("%s: %s", source or "mesh", note)
     return F_out, note
