@@ -19,6 +19,7 @@ from scipy.spatial.transform import Rotation
 from ..errors import AutobonesError
 from ..io.files import read_json
 from ..io.gltf import add_animation, pack_glb, read_glb
+from ..orient import Frame
 from .names import ARKIT_NAMES
 
 BONE_ANGLES = {"head": ("HeadYaw", "HeadPitch", "HeadRoll"),
@@ -87,12 +88,11 @@ def capture_glb(rig_path, capture, bones=True):
     if bones and capture.angles:
         json_path = sidecar_paths(rig_path)[0]
         try:
-            frame = read_json(json_path, "sidecar")["frame"]
             # the head's axes (a transferred rig's anatomical ones, Frame.axes), else its frame's
-            Rf = np.asarray(frame.get("axes") or frame["rotation"], dtype=np.float64)
+            Rf = Frame.from_dict(read_json(json_path, "sidecar")["frame"]).turn_axes
         except AutobonesError:  # read_json's own message, naming the file
             raise
-        except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        except (OSError, ValueError, KeyError, TypeError) as exc:
             raise AutobonesError(f"{json_path}: the rig's sidecar is needed for the head and eye turns "
                                  f"({type(exc).__name__}: {exc}); or animate without them (--no-bones)") from None
         world, parent = _world_rotations(nodes)

@@ -112,11 +112,11 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, p
         if name not in names:
             raise AutobonesError(f"{what}: the rig has no {name!r} bone")
 
+    basis = None if basis is None else np.asarray(basis, dtype=np.float64)
+
     def about(R):   # a rotation about the basis' axes, in canonical coordinates
         return R if basis is None else basis.T @ R @ basis
 
-    if basis is not None:
-        basis = np.asarray(basis, dtype=np.float64)
     world = {}
     base = (np.eye(3), np.zeros(3))
     if neck_deg is not None and np.any(np.asarray(neck_deg, dtype=float)):

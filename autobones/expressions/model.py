@@ -498,5 +498,5 @@ class ExpressionModel:
         if look_at is not None:
             look_at = self.frame_.to_canonical(np.asarray(look_at, dtype=np.float64).reshape(1, 3))[0]
         moves = bone_transforms(self.bones_, self.pivots_, 0.0, gaze, look_at, head_deg, neck_deg,
-                                basis=getattr(self, "turn_basis_", None))
+                                basis=self.turn_basis_)
         return blend_bones(d, V, self.jaw_weights_, moves)
