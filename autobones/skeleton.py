@@ -60,6 +60,20 @@ class Skeleton:
         """A copy with ``fn`` ((k, 3) -> (k, 3)) applied to heads and tails."""
         return Skeleton(list(self.names), self.parents.copy(), fn(self.heads), fn(self.tails))
 
+    def aimed(self, name, direction):
+        """A copy whose bone ``name`` points along ``direction`` (3,): its tail moved about its head,
+        the bone's length kept (an exported joint's +Y runs head -> tail, so this sets the axis a DCC
+        turns the bone about)."""
+        from .errors import AutobonesError
+
+        d = np.asarray(direction, dtype=np.float64)
+        if d.shape != (3,) or not np.isfinite(d).all() or not np.linalg.norm(d) > 0:
+            raise AutobonesError(f"direction: expected a nonzero finite 3-vector, got {direction!r}")
+        i = self.index(name)
+        tails = self.tails.copy()
+        tails[i] = self.heads[i] + np.linalg.norm(self.tails[i] - self.heads[i]) * d / np.linalg.norm(d)
+        return Skeleton(list(self.names), self.parents.copy(), self.heads.copy(), tails)
+
     def to_list(self):
         return [
             {"name": n, "parent": (self.names[p] if p >= 0 else None),

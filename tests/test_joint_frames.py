@@ -212,6 +212,33 @@ def test_the_head_joint_nods_about_its_local_x_and_turns_about_its_local_y(rigs,
     assert abs(sway[0]) > 5 * abs(sway[2]) and abs(sway[0]) > 0.02, (sway, tilt)  # +Z tilts the crown sideways
 
 
+def test_a_transferred_head_joints_own_y_is_the_axis_the_head_turns_about(tmp_path):
+    """The generic's head bone, carried by ``transfer``, ran from the skull's pivot toward the vertex:
+    3-81 degrees off the head's anatomical up on the zoo's heads (the goat 21). A DCC turning the
+    head joint about its own +Y then rolled the head. Its tail now lies along ``Frame.turn_axes``' up,
+    the axis the rig's own ``pose`` turns the head about: a 15 degree twist of the glb's head joint
+    about its local +Y keeps the goat's eye corners level."""
+    from autobones.io.landmarks import read_landmarks
+    from autobones.io.mesh import load_mesh
+    from shared_data import data
+
+    V, F = load_mesh(data("misc/goathead.obj"))
+    lm = read_landmarks(ROOT / "tests" / "landmarks" / "goathead.landmarks.json")
+    rig = autobones.transfer((V, F), lm)
+    rig.save(tmp_path / "goat.glb")
+    glb = GlbSkin(tmp_path / "goat.glb")
+    h = glb.names.index("head")
+    left, up, _ = rig.frame.turn_axes
+    G = glb.world()
+    np.testing.assert_allclose(G[h, :3, 1], up, atol=1e-6)   # the joint's +Y: the head's up
+    np.testing.assert_allclose(G[h, :3, 0], left, atol=1e-6)  # its +X: the head's left
+    eyes = [int(np.argmin(np.linalg.norm(V - lm[n], axis=1))) for n in ("exocanthion_l", "exocanthion_r")]
+    exex = np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"])
+    turned = glb.skinned(h, Rotation.from_rotvec([0.0, np.radians(15.0), 0.0]).as_matrix())
+    tilt = abs(((turned[eyes[0]] - turned[eyes[1]]) - (glb.V[eyes[0]] - glb.V[eyes[1]])) @ up)
+    assert tilt < 0.01 * exex, tilt / exex
+
+
 # --------------------------------------------------------------------------- every export turns as the glb
 
 @pytest.mark.parametrize("name", ["place", "transfer"])

@@ -272,6 +272,9 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     labels, facial_mask = _face_labels(fields, generic, len(V))
     fitted = _fitted_landmarks(generic, P, ANGLE)
     W, jaw_note = _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted)
+    # the generic's head bone, carried, runs from the skull's pivot toward the vertex, 6-25 degrees
+    # ahead of the head's up: a DCC turning it about its own axis (+Y) turned the head about that line
+    skeleton = skeleton.aimed("head", frame.turn_axes[1]) if "head" in skeleton.names else skeleton
 
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
