@@ -1,6 +1,7 @@
 """expressions.lids, jaw, mouth_parts, bones and the rotation helpers of geometry.rotations."""
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from autobones.errors import AutobonesError
 from autobones.expressions.bones import blend_bones, bone_transforms, turn_jaw, turn_lids
@@ -86,6 +87,22 @@ def test_bone_transforms_and_blending():
     T = bone_transforms(names, piv, 0.0, None, None, (10.0, 0.0, 0.0), None)
     d = blend_bones(np.zeros_like(V), V, W, T)
     assert np.allclose(V + d, V @ T[1][0].T + T[1][1])
+
+
+def test_an_aimed_eye_starts_from_the_heads_own_front():
+    """A transferred rig's canonical frame leans with the face (the goat's 46 degrees); its head's
+    axes (``basis``) do not. An eye aimed at a point straight ahead of the head along the basis'
+    front does not turn (it turned by the lean before: the aim started from the canonical +Z), and a
+    point ahead and to the left turns it about the basis' up."""
+    names = ["neck", "head", "jaw", "eye_l", "eye_r"]
+    piv = np.array([[0, -1.0, 0], [0, 0, 0], [0, 0.1, 0.2], [0.3, 0.4, 0.5], [-0.3, 0.4, 0.5]])
+    basis = axis_rotation(0, 40.0).T   # rows left, up, front of a head pitched 40 degrees in the canonical frame
+    ahead = piv[3] + 10.0 * basis[2]
+    R = bone_transforms(names, piv, 0.0, None, ahead, None, None, basis=basis)[3][0]
+    assert np.abs(R - np.eye(3)).max() < 1e-9
+    R = bone_transforms(names, piv, 0.0, None, piv[3] + 10.0 * (basis[2] + basis[0]), None, None, basis=basis)[3][0]
+    axis = Rotation.from_matrix(R).as_rotvec()
+    assert abs(np.degrees(np.linalg.norm(axis)) - 45.0) < 1e-6 and axis @ basis[1] > 0.999 * np.linalg.norm(axis)
 
 
 # ------------------------------------------------------------------------------ lids

@@ -63,14 +63,15 @@ def turn_jaw(d, V, jaw_deg, weight, pivot, glide):
     return d
 
 
-def _eye_rotation(eye_pivot, base, look_at, gaze):
-    """Rotation (3, 3) of one eye in the head's rest frame, or None: aimed at ``look_at`` (3,)
-    canonical point in the posed world, carried back through ``base``; or (yaw, pitch) ``gaze``."""
+def _eye_rotation(eye_pivot, base, look_at, gaze, ahead=(0.0, 0.0, 1.0)):
+    """Rotation (3, 3) of one eye in the head's rest frame, or None: from looking ``ahead`` (3,),
+    aimed at ``look_at`` (3,) canonical point in the posed world, carried back through ``base``; or
+    (yaw, pitch) ``gaze``."""
     if look_at is not None:
         # the target is given in the posed world: bring it into the head's rest frame
         tgt = base[0].T @ (look_at - base[1])
         dvec = tgt - eye_pivot
-        return align_rotation(np.array([0.0, 0.0, 1.0]), dvec / max(np.linalg.norm(dvec), 1e-300))
+        return align_rotation(np.asarray(ahead, dtype=np.float64), dvec / max(np.linalg.norm(dvec), 1e-300))
     if gaze is not None and np.any(np.asarray(gaze, dtype=float)):
         yaw, pitch = (list(np.ravel(gaze).astype(float)) + [0.0])[:2]
         return axis_rotation(1, yaw) @ axis_rotation(0, -pitch)
@@ -141,7 +142,9 @@ def bone_transforms(names, pivots, jaw_deg, gaze, look_at, head_deg, neck_deg, p
         Re = None
         if look_at is not None or gazing:
             need(eye, "look_at" if look_at is not None else "gaze")
-            Re = _eye_rotation(pivots[names.index(eye)], base, look_at, gaze)
+            # at rest the eyes look along the head's front (the basis', not a leaning frame's)
+            Re = _eye_rotation(pivots[names.index(eye)], base, look_at, gaze,
+                               ahead=(0.0, 0.0, 1.0) if basis is None else basis[2])
             if Re is not None and look_at is None:
                 Re = about(Re)   # a gaze's yaw and pitch are about the head's axes; an aim is a point
         if Re is not None:
