@@ -217,7 +217,7 @@ def test_a_transferred_head_joints_own_y_is_the_axis_the_head_turns_about(tmp_pa
     3-81 degrees off the head's anatomical up on the zoo's heads (the goat 21). A DCC turning the
     head joint about its own +Y then rolled the head. Its tail now lies along ``Frame.turn_axes``' up,
     the axis the rig's own ``pose`` turns the head about: a 15 degree twist of the glb's head joint
-    about its local +Y keeps the goat's eye corners level."""
+    about its local +Y keeps the goat's eye corners level; ``place --landmarks``' head bone follows it."""
     from autobones.io.landmarks import read_landmarks
     from autobones.io.mesh import load_mesh
     from shared_data import data
@@ -237,6 +237,11 @@ def test_a_transferred_head_joints_own_y_is_the_axis_the_head_turns_about(tmp_pa
     turned = glb.skinned(h, Rotation.from_rotvec([0.0, np.radians(15.0), 0.0]).as_matrix())
     tilt = abs(((turned[eyes[0]] - turned[eyes[1]]) - (glb.V[eyes[0]] - glb.V[eyes[1]])) @ up)
     assert tilt < 0.01 * exex, tilt / exex
+    # place --landmarks builds on transfer: its head bone follows the same up
+    placed = autobones.place((V, F), landmarks=lm, density=4)
+    k = placed.skeleton.names.index("head")
+    d = placed.skeleton.tails[k] - placed.skeleton.heads[k]
+    np.testing.assert_allclose(d / np.linalg.norm(d), placed.frame.turn_axes[1], atol=1e-9)
 
 
 # --------------------------------------------------------------------------- every export turns as the glb

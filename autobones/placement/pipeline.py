@@ -208,7 +208,7 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
     """``place`` with landmarks: facial bones on top of the transferred neck, head, jaw and eyes."""
     from ..rig_transfer.pipeline import transfer
 
-    base = transfer(mesh, landmarks, rig=rig, up=up, front=front)
+    base = transfer(mesh, landmarks, rig=rig, up=up, front=front, aim_head=False)
     t = time.perf_counter()
     V, frame = base.vertices, base.frame
     F = outward_faces(V, base.faces)[0]   # transfer keeps the file's triangles; the heat solve needs them outward
@@ -241,7 +241,9 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
         W[:, parent] = mass * H[:, 0]
         W[:, kids] = mass[:, None] * H[:, 1:]
     base.timings["facial+weights"] = time.perf_counter() - t
-    base.skeleton = skel_c.transformed(frame.from_canonical)
+    # the facial bones' heat ran against the generic's head bone as carried; exported, it twists about
+    # the head's up, as a transferred rig's does
+    base.skeleton = skel_c.transformed(frame.from_canonical).aimed("head", frame.turn_axes[1])
     base.weights = W
     base.facial_mask = mask
     base.options.update({"command": "place", "density": density if isinstance(density, str) else int(density),

@@ -169,7 +169,7 @@ def generic_expression_space(generic, rig=None):
 
 
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
-             symmetric="auto", expression_fit=True, **fit_options):
+             symmetric="auto", expression_fit=True, aim_head=True, **fit_options):
     """Carry the generic rig onto a landmarked head.
 
     Parameters
@@ -207,6 +207,10 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
         symmetric about their landmarks' planes (sculpts, cartoons, robots; not real scans, whose
         asymmetry the rig must follow, nor a one-sided expression, nor automatic landmarks);
         ``rig.options['symmetric']`` says what was measured and done.
+    aim_head : bool
+        Turn the ``head`` bone about its joint onto the up the head turns about
+        (:attr:`autobones.orient.Frame.turn_axes`), so an exported head joint twists about it; False: the
+        generic's bone as carried (``place --landmarks`` weighs its facial bones against that one).
     **fit_options
         Options of :func:`autobones.rig_transfer.correspondence.fit_surface`; ``jaw`` defaults to the
         generic rig's articulated jaw prior (:func:`generic_jaw_prior`; ``jaw=None`` fits without it).
@@ -272,10 +276,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     labels, facial_mask = _face_labels(fields, generic, len(V))
     fitted = _fitted_landmarks(generic, P, ANGLE)
     W, jaw_note = _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted)
-    # the generic's head bone, carried, runs from the skull's pivot toward the vertex, 6-25 degrees
-    # ahead of the head's up: a DCC turning it about its own axis (+Y) turned the head about that line
-    skeleton = skeleton.aimed("head", frame.turn_axes[1]) if "head" in skeleton.names else skeleton
-
+    if aim_head and "head" in skeleton.names:   # carried, it ran toward the vertex: 3-81 degrees off
+        skeleton = skeleton.aimed("head", frame.turn_axes[1])
     options = {"command": "transfer", "landmarks_used": shared, "up": up, "front": front,
                "landmarks_source": "file" if isinstance(landmarks, (str, os.PathLike)) else
                "detected" if detected is not None else "given",
