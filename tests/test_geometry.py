@@ -84,6 +84,13 @@ def test_part_areas_and_large_parts_go_by_area_not_by_vertex_count():
     V2 = np.vstack([V[:3], V[:3] + [0, 0, 20.0]])
     np.testing.assert_array_equal(without_large_parts(V2, np.array([[0, 1, 2], [3, 4, 5]]), share=0.03),
                                   [[0, 1, 2], [3, 4, 5]])
+    # a ball (radius 0.3: area 9 % of the unit sphere's) is a lump, not spread: kept inside the sphere
+    # (a mouth), left out set on its top (a hat: mostly outside the sphere's convex hull)
+    Vs, Fs = icosphere(2)
+    for centre, kept in (([0, 0, 0.2], True), ([0, 0, 1.1], False)):
+        Vb = np.vstack([Vs, 0.3 * Vs + centre])
+        Fb = np.vstack([Fs, Fs + len(Vs)])
+        np.testing.assert_array_equal(without_large_parts(Vb, Fb, share=0.03), Fb if kept else Fs)
 
 
 def test_weld_by_size_welds_alike_in_any_unit():

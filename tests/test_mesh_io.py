@@ -334,3 +334,34 @@ def test_place_rigs_a_head_with_a_stray_triangle(caplog):
     side = rig.sidecar()
     assert side["options"]["dropped_parts"]["vertices"] == 3 and side["options"]["dropped_parts"]["weighted_to"] == "neck"
     assert side["vertex_count"] == len(W)
+
+
+@pytest.mark.parametrize("command", ["place", "transfer"])
+def test_a_head_wearing_a_hat_is_rigged_as_the_bare_head(command):
+    """A lump set on the head (a ball of 0.15 head sizes on the goat's crown, a separate part) turned
+    the goat's frame 113 degrees and, rigged with the head, moved ``place``'s joints 0.07 head sizes.
+    It is left out of the rig (``io.parts.worn_parts``) and weighted as the skin nearest it: the head's
+    own rig bit for bit, the hat riding the crown; the sidecar's ``worn_parts`` says so."""
+    from scipy.spatial import cKDTree
+
+    import autobones
+    from autobones.io.landmarks import read_landmarks
+    from shared_data import ROOT
+
+    V, F = load_mesh(data("misc/goathead.obj"))
+    bare_frame = autobones.detect_frame(V, F)
+    C = bare_frame.to_canonical(V)
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.15)
+    hat = bare_frame.from_canonical(np.asarray(ball.vertices) + C[np.argmax(C[:, 1])] + [0.0, 0.12, 0.0])
+    W, G = np.vstack([V, hat]), np.vstack([F, np.asarray(ball.faces) + len(V)])
+    if command == "place":
+        rig_of = lambda mesh: autobones.place(mesh, density="sparse")  # noqa: E731
+    else:
+        marks = read_landmarks(ROOT / "tests" / "landmarks" / "goathead.landmarks.json")
+        rig_of = lambda mesh: autobones.transfer(mesh, marks)  # noqa: E731
+    bare, worn = rig_of((V, F)), rig_of((W, G))
+    assert np.array_equal(worn.weights[:len(V)], bare.weights) and np.array_equal(worn.vertices, W)
+    assert np.array_equal(worn.skeleton.heads, bare.skeleton.heads)
+    near = cKDTree(V).query(hat)[1]
+    assert np.array_equal(worn.weights[len(V):], bare.weights[near])
+    assert worn.options["worn_parts"]["parts"] == 1 and worn.options["worn_parts"]["vertices"] == len(hat)

@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from .facial_bones import bone_count, check_seed, facial_bones
-from ..io.mesh import resolve_mesh, stray_parts, wound_outward
+from ..io.mesh import resolve_mesh, wound_outward
+from ..io.parts import stray_parts, worn_parts
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
 from ..geometry.topology import used_vertices
@@ -84,8 +85,10 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     if landmarks is not None:
         return _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state)
     V, F, source = resolve_mesh(mesh, strays=True)
-    body = stray_parts(V, F)
-    if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
+    # small parts far off (weighted to the neck), then large parts set on the head, a hat (weighted as
+    # the skin under them): rigged without them (io.parts)
+    body = stray_parts(V, F) or worn_parts(V, F)
+    if body is not None:
         return body.restore(place((body.V, body.F), density, up, front, random_state), source)
     F_given, (F, wound) = F, wound_outward(V, F, source)   # rigged outward, written as given
     lap("load")

@@ -45,7 +45,8 @@ from .under_skin import carry_muscles, ride, under_skin_warp
 from ..errors import AutobonesError, counted
 from ..io.jsonable import jsonable
 from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
-from ..io.mesh import resolve_mesh, stray_parts, wound_outward
+from ..io.mesh import resolve_mesh, wound_outward
+from ..io.parts import stray_parts, worn_parts
 from ..orient import detect_frame, frame_from_landmarks
 from ..geometry.weights import prune_weights
 from ..rig import Rig
@@ -237,8 +238,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap, timings = watch.lap, watch.timings
 
     V, F, source = resolve_mesh(head, strays=True)
-    body = stray_parts(V, F)
-    if body is not None:   # small parts far off: rigged without them, then weighted to the neck (io.mesh)
+    body = stray_parts(V, F) or worn_parts(V, F)
+    if body is not None:   # parts far off or set on the head: rigged without them (io.parts)
         return body.restore(transfer((body.V, body.F), landmarks, rig, up, front, control_points, details, arkit,
                                      symmetric, expression_fit, **fit_options), source)
     F_given, (F, wound) = F, wound_outward(V, F, source)   # fitted outward, written as given
