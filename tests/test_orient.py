@@ -434,3 +434,28 @@ def test_a_hat_set_on_the_crown_is_left_out_of_the_frame(head):
     worn = detect_frame(np.vstack([V, hat]), np.vstack([F, np.asarray(ball.faces) + len(V)]))
     for row in (1, 2):
         assert np.degrees(np.arccos(np.clip(worn.rotation[row] @ bare.rotation[row], -1, 1))) < 1.0
+
+
+def test_a_crack_left_by_split_triangles_is_no_cut():
+    """Half the goat's triangles each split in four without their neighbours: every seam is a
+    T-junction, the long edge and its two halves unjoined though the surface is closed there. Read as
+    open rim, the cracks made a cut that turned the goat 122 degrees (12 of 19 shared heads 13-149);
+    ``cut_cues.crack_edges`` finds both sides of each crack, and the frame is the whole goat's."""
+    from autobones.cut_cues import crack_edges
+
+    # a unit square of two triangles, one split in four: the diagonal (0, 2) faces the halves
+    # (0, 4) and (4, 2), a crack; the square's own sides stay rim
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 0], [0.5, 0, 0], [1, 0.5, 0]], float)
+    rim = np.array([[0, 2], [0, 4], [4, 2], [0, 5], [5, 1], [1, 6], [6, 2], [2, 3], [3, 0]])
+    assert crack_edges(V, rim).tolist() == [True, True, True] + [False] * 6
+    V, F = load_mesh(data("misc/goathead.obj"))
+    pick = np.random.default_rng(0).random(len(F)) < 0.5
+    S = F[pick]
+    k, n = len(S), len(V)
+    mids = [(V[S[:, i]] + V[S[:, (i + 1) % 3]]) / 2 for i in range(3)]   # per triangle, never shared
+    m01, m12, m20 = (n + j * k + np.arange(k) for j in range(3))
+    split = np.vstack([np.c_[S[:, 0], m01, m20], np.c_[m01, S[:, 1], m12], np.c_[m20, m12, S[:, 2]],
+                       np.c_[m01, m12, m20]])
+    whole, cracked = detect_frame(V, F), detect_frame(np.vstack([V, *mids]), np.vstack([F[~pick], split]))
+    for row in (1, 2):
+        assert np.degrees(np.arccos(np.clip(whole.rotation[row] @ cracked.rotation[row], -1, 1))) < 10
