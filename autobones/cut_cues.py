@@ -21,6 +21,8 @@ HOLE = 0.5
 # a loop at the far end of the surface from the main one is a second cut when it is at least this share
 # of the main loop's length (a missing crown against the neck's cut: 0.7-1.4)
 FAR_SHARE = 0.5
+# rim edges tested for cracks at a time: (CHUNK, 65) candidates, ~100 MB at most
+CHUNK = 1 << 16
 
 
 def cut_cues(V, F):
@@ -58,7 +60,7 @@ def crack_edges(V, rim, neighbours=(8, 64), tol=1e-3):
     hole; read as one, half the triangles of a head split so turned 12 of 19 shared heads 13-149
     degrees. An edge is on a crack when its midpoint lies within ``tol`` of its own length of one of
     the rim edges whose midpoints are nearest: the first ``neighbours`` for every edge, then more for
-    those not yet found (where many cracks meet, the partner is farther down the list)."""
+    those not yet found beside a crack (where many cracks meet, the partner is farther down the list)."""
     from scipy.spatial import cKDTree
 
     on = np.zeros(len(rim), dtype=bool)
@@ -69,17 +71,28 @@ def crack_edges(V, rim, neighbours=(8, 64), tol=1e-3):
     tree, todo = cKDTree(mid), np.arange(len(rim))
     for k in neighbours:
         k = min(k + 1, len(rim))
-        _, near = tree.query(mid[todo], k=k)               # (t, k), the edge itself among them
-        d = b[near] - a[near]                               # (t, k, 3) candidate edges
-        dd = np.maximum(np.einsum("tkc,tkc->tk", d, d), 1e-300)
-        t = np.einsum("tkc,tkc->tk", mid[todo, None, :] - a[near], d) / dd
-        gap = np.linalg.norm(a[near] + np.clip(t, 0.0, 1.0)[..., None] * d - mid[todo, None, :], axis=2)
-        hit = ((gap <= tol * length[todo, None]) & (near != todo[:, None]) & (length[near] > 0)).any(axis=1)
+        found = [_on_near_edge(a, b, mid, length, tree, rows, k, tol)
+                 for rows in np.array_split(todo, -(-len(todo) // CHUNK))]
+        hit = np.concatenate([h for h, _ in found])
         on[todo[hit]] = True
-        todo = todo[~hit]
+        # looked at farther only beside a crack found: a mesh with no cracks costs one pass
+        beside = np.concatenate([on[near].any(axis=1) for _, near in found])
+        todo = todo[~hit & beside]
         if not len(todo):
             break
     return on
+
+
+def _on_near_edge(a, b, mid, length, tree, rows, k, tol):
+    """(len(rows),) bool: the midpoints of edges ``rows`` within ``tol`` of their length of one of the
+    other edges among their ``k`` nearest (``tree`` over the midpoints; edges from ``a`` to ``b``), and
+    those (len(rows), k) nearest edges."""
+    _, near = tree.query(mid[rows], k=k)                 # (t, k), the edge itself among them
+    d = b[near] - a[near]                                 # (t, k, 3) candidate edges
+    dd = np.maximum(np.einsum("tkc,tkc->tk", d, d), 1e-300)
+    t = np.einsum("tkc,tkc->tk", mid[rows, None, :] - a[near], d) / dd
+    gap = np.linalg.norm(a[near] + np.clip(t, 0.0, 1.0)[..., None] * d - mid[rows, None, :], axis=2)
+    return ((gap <= tol * length[rows, None]) & (near != rows[:, None]) & (length[near] > 0)).any(axis=1), near
 
 
 def midline_cuts(cues, normal, offset):
