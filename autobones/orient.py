@@ -51,7 +51,7 @@ from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
-from .geometry.topology import distinct_faces, used_vertices, without_large_parts
+from .geometry.topology import SHELL, SKIN_LEAD, SPREAD, distinct_faces, used_vertices, without_large_parts
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
 __all__ = ["Frame", "anatomical_axes", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis",
@@ -74,17 +74,6 @@ FACE_UNLIKE = 0.28
 # better than this share of the whole reference head stood on that cut does (the shared heads' front
 # halves and quarters: 0.25-0.70 of it; the zoo's wide-necked armadillo and beast: 0.85-0.94)
 FACE_VS_NECK = 0.75
-# a part beside the skin (the widest part, when it covers SKIN_LEAD times the next) covering SHELL of
-# the area and reaching SPREAD of the mesh's radius from its own centre (hair, a beard) is left out of
-# the frame. The shared heads' other parts: ICT's mouth 0.085 of the area (0.11-0.13 in ICT cut into a
-# mask, but reaching 0.29-0.30: a lump inside), eyeballs 0.018; the robot's 0.075 and less; hair copies
-# (benchmarks/accessories.py) 0.17-0.48, reaching 0.45-0.98. A lump set on the head (a hat: a ball of
-# 0.15 head sizes on the crown, 0.11-0.15 of the area) reaches less, but lies outside the skin's convex
-# hull, which a lump inside (the mouth) does not: left out too (it turned 6 of 20 shared heads 30-132
-# degrees off). A face mask under a wig as large has no clear skin: nothing is left out.
-SHELL = 0.1
-SKIN_LEAD = 1.3
-SPREAD = 0.4
 
 
 @dataclass(frozen=True)

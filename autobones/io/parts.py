@@ -157,10 +157,9 @@ def worn_parts(V, F):
     """
     from ..geometry.areas import triangle_areas
     from ..geometry.topology import large_parts
-    from ..orient import SHELL, SKIN_LEAD
 
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
-    drop, part = large_parts(V, F, SHELL, SKIN_LEAD, reach=np.inf)   # lumps only, no spread shells
+    drop, part = large_parts(V, F, reach=np.inf)   # lumps only, no spread shells
     if not drop.any():
         return None
     body = np.zeros(len(V), dtype=bool)
