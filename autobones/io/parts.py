@@ -87,8 +87,8 @@ class LeftOut:
         r = self.record
         if self.worn:
             rig.options["worn_parts"] = {**r, "weighted_as": "the nearest skin"}
-            log.warning("%s: rigged without %d part%s set on the head (a hat: %d vertices, %.2g%% of the "
-                        "area), then weighted as the skin nearest each vertex", source or "mesh", r["parts"],
+            log.warning("%s: rigged without %d separate part%s set on it (a hat, a pad: %d vertices, %.2g%% of "
+                        "the area), then weighted as the skin nearest each vertex", source or "mesh", r["parts"],
                         "s" if r["parts"] > 1 else "", r["vertices"], 100 * r["area_fraction"])
             return rig
         rig.options["dropped_parts"] = {**r, "weighted_to": rig.skeleton.names[root]}
