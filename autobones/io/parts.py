@@ -141,7 +141,7 @@ def stray_parts(V, F):
     if not stray.any() or dropped >= STRAY_AREA * total:
         return None
     return LeftOut(V, F, ~stray[part] | ~np.isin(np.arange(len(V)), used), stray[face_part], dropped / total,
-                      int(stray.sum()))
+                   int(stray.sum()))
 
 
 def worn_parts(V, F):
