@@ -92,6 +92,17 @@ def test_unfold_removes_the_folds_and_leaves_the_rest_bit_for_bit():
     assert np.isclose(rep["max_change"], np.linalg.norm(R - D, axis=1).max())
 
 
+def test_unfold_projects_a_cluster_of_folds_together_in_a_few_steps():
+    """The turned triangles are projected together (a Gauss-Newton step of all their constraints): a
+    shift of 4 edges folds a cluster that one-at-a-time sweeps, averaged per vertex, took 1,936 sweeps
+    to turn back (measured 7 now)."""
+    V, F = grid()
+    D = bump(V, np.array([6.0, 6.0]), 4.0)
+    R, rep = unfold(V, F, D)
+    assert rep["before"] > 0 and rep["after"] == 0 == folded_triangles(V, F, R).sum()
+    assert rep["iterations"] <= 20
+
+
 def test_unfold_reports_what_it_cannot_turn_back():
     """A shift of 4 edges within 2.5 of a point folds more than moving the folded triangles' own
     vertices undoes (measured 4 -> 2): fewer remain, and the report counts them truly."""
