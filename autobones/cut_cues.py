@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from .geometry.normals import triangle_normals
 from .geometry.topology import used_vertices, weld_by_size
@@ -61,8 +62,6 @@ def crack_edges(V, rim, neighbours=(8, 64), tol=1e-3):
     degrees. An edge is on a crack when its midpoint lies within ``tol`` of its own length of one of
     the rim edges whose midpoints are nearest: the first ``neighbours`` for every edge, then more for
     those not yet found beside a crack (where many cracks meet, the partner is farther down the list)."""
-    from scipy.spatial import cKDTree
-
     on = np.zeros(len(rim), dtype=bool)
     if len(rim) < 2:
         return on

@@ -51,7 +51,7 @@ from .errors import AutobonesError
 from .frame_candidates import axis_candidates, cut_candidates, shape_candidates
 from .geometry.mirror_plane import best_plane, mirror_error, onto_plane, reflect, refine_plane, shape_starts
 from .geometry.sample import sample_surface
-from .geometry.topology import SHELL, SKIN_LEAD, SPREAD, distinct_faces, used_vertices, without_large_parts
+from .geometry.topology import distinct_faces, used_vertices, without_large_parts
 from .reference_overlay import SAMPLE_COUNT, best_part_scores, default_reference, overlay_scores, refine_angle
 
 __all__ = ["Frame", "anatomical_axes", "detect_frame", "frame_from_landmarks", "nearest_axis", "parse_axis",
@@ -201,7 +201,7 @@ def detect_frame(V, F, up=None, front=None, reference=None):
     F = distinct_faces(F)
     # the frame is found from the head without large parts beside it (hair, a beard: open shells or
     # closed volumes), which the bald reference overlays badly and whose rims read as cuts
-    head = without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)
+    head = without_large_parts(V, F)
     P, _, _ = sample_surface(V, head, SAMPLE_COUNT, seed=0)
     center = P.mean(axis=0)
     rms = np.sqrt(((P - center) ** 2).sum(axis=1).mean())

@@ -138,26 +138,39 @@ def large_parts(V, F, share=SHELL, lead=SKIN_LEAD, reach=SPREAD, lump_lead=2.0):
     drop = area >= share * area.sum()
     drop[first] = False
     used = np.zeros(len(Vw), dtype=bool)
-    used[Fw.ravel()] = True
+    used[used_vertices(Fw, len(Vw))] = True
     radius = lambda P: float(np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).max()))
     whole = radius(Vw[used])
+    hull = []   # the widest part's, built once, when a candidate first needs it
     for k in np.flatnonzero(drop):
         P = Vw[used & (part == k)]
-        drop[k] = radius(P) >= reach * whole or (
-            area[first] >= lump_lead * area[k] and _outside_hull(Vw[used & (part == first)], P) > 0.5)
+        if radius(P) >= reach * whole:
+            continue
+        if area[first] >= lump_lead * area[k]:
+            hull = hull or [_hull(Vw[used & (part == first)])]
+            drop[k] = _outside_hull(hull[0], P) > 0.5
+        else:
+            drop[k] = False
     return drop[face_part], face_part
 
 
-def _outside_hull(H, P):
-    """Share of the points ``P`` (k, 3) outside the convex hull of ``H`` (h, 3); 0 for a flat ``H``."""
+def _hull(H):
+    """(facet planes (f, 4), tolerance) of the convex hull of the points ``H`` (h, 3), or None when
+    ``H`` is flat."""
     from scipy.spatial import ConvexHull, QhullError
 
     try:
-        hull = ConvexHull(H)
+        return ConvexHull(H).equations, 1e-9 * float(np.ptp(H, axis=0).max())
     except QhullError:
+        return None
+
+
+def _outside_hull(hull, P):
+    """Share of the points ``P`` (k, 3) outside ``hull`` (:func:`_hull`); 0 when it is None (flat)."""
+    if hull is None:
         return 0.0
-    tol = 1e-9 * float(np.ptp(H, axis=0).max())
-    return float(((P @ hull.equations[:, :3].T + hull.equations[:, 3]) > tol).any(axis=1).mean())
+    planes, tol = hull
+    return float(((P @ planes[:, :3].T + planes[:, 3]) > tol).any(axis=1).mean())
 
 
 def weld_by_size(V, F, share=2e-6):

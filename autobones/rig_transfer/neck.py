@@ -31,7 +31,6 @@ from ..cut_cues import bottom_cut, cut_cues, is_planar_cut, midline_cuts
 from ..geometry.head_share import (STILL, apply_head_share, face_only, head_share, mask_distance, neck_base_height,
                                    smooth_share)
 from ..geometry.smooth import smoothstep
-from ..orient import SHELL, SKIN_LEAD, SPREAD
 from ..orient import anatomical_axes as _anatomical_axes  # the wrapper below keeps its fallback
 from ..geometry.topology import used_vertices, without_large_parts
 
@@ -91,7 +90,7 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None,
     angle = [canonical(p)[0] for p in jaw_angle_points(landmarks, fitted)]
     angle = (min(p[1] for p in angle), float(np.mean([p[2] for p in angle]))) if angle else None
     # the cut of the head itself, not of a large part beside it (hair: its rim is no neck cut)
-    cues = cut_cues(V, without_large_parts(V, F, SHELL, SKIN_LEAD, SPREAD)) if cues is None else cues
+    cues = cut_cues(V, without_large_parts(V, F)) if cues is None else cues
     cues = midline_cuts(cues, frame.rotation[0], frame.origin @ frame.rotation[0])  # an eye hole is no cut
     cues = bottom_cut(cues, frame.rotation[1])  # open at both ends: the neck's cut, not a missing crown
     cut = (canonical(cues["loop_centre"])[0], cues["loop_normal"] @ R.T) if is_planar_cut(cues) else None
