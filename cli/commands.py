@@ -19,9 +19,9 @@ def cmd_place(args):
         raise AutobonesError("--expressions needs muscles, which place does not make; use "
                              "autobones transfer HEAD --landmarks FILE --expressions -o OUT.glb")
     head = args.head
-    out = args.output or _default_out(head)
+    out = _rig_glb(args.output or _default_out(head))
     random_state = seed(args.seed, "--seed")
-    _never_the_input(_rig_outputs(out), [head, args.landmarks])
+    _check_outputs(_rig_outputs(out), [head, args.landmarks])
     t = time.perf_counter()
     with progress(args, "placing bones"):
         rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=random_state,
@@ -46,17 +46,27 @@ def cmd_place(args):
 
 
 def _rig_outputs(out):
-    """The three files ``Rig.save(out)`` writes (a name without .glb is refused by the save itself)."""
+    """The three files ``Rig.save(out)`` writes (just ``out`` when it is no .glb: an input rig's name)."""
     from autobones.rig import sidecar_paths
 
     return [out, *sidecar_paths(out)] if out.lower().endswith(".glb") else [out]
 
 
-def _never_the_input(outputs, inputs):
-    """Refuse, before any work, an output path that is one of the files read (``place a.glb -o a.glb``)."""
-    from autobones.io.atomic import refuse_overwriting_inputs
+def _check_outputs(outputs, inputs):
+    """Refuse, before any work, an output that cannot be written: one of the files read (``place a.glb
+    -o a.glb``), in a missing or read-only folder, or where a folder stands (``autobones.io.atomic.check_outputs``)."""
+    from autobones.io.atomic import check_outputs
 
-    refuse_overwriting_inputs(outputs, inputs)
+    check_outputs(outputs, inputs)
+
+
+def _rig_glb(out):
+    """``out`` when it names a .glb (what ``Rig.save`` writes), refused at once otherwise."""
+    if not out.lower().endswith(".glb"):
+        from autobones.errors import AutobonesError
+
+        raise AutobonesError(f"{out}: the output must be a .glb file")
+    return out
 
 
 def _default_out(head):
@@ -67,13 +77,13 @@ def _default_out(head):
 def cmd_transfer(args):
     import autobones
 
-    out = args.output or _default_out(args.head)
+    out = _rig_glb(args.output or _default_out(args.head))
     if args.tissue and not (args.expressions or args.expression_sides):
         from autobones.errors import AutobonesError
 
         raise AutobonesError("--tissue refines the AU morph targets: add --expressions (or pose with "
                              "autobones pose RIG.glb --tissue)")
-    _never_the_input(_rig_outputs(out), [args.head, args.landmarks])
+    _check_outputs(_rig_outputs(out), [args.head, args.landmarks])
     t = time.perf_counter()
     with progress(args, "transferring the rig" + (" and its ARKit shapes" if args.arkit else "")):
         rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
@@ -143,7 +153,7 @@ def cmd_pose(args):
     out = args.output or os.path.splitext(os.path.basename(args.rig))[0].removesuffix(".rig") + ".pose.obj"
     if os.path.splitext(out)[1].lower() not in FORMATS:  # refused before the rig is read
         raise AutobonesError(f"{out}: the posed mesh is written as .obj or .glb")
-    _never_the_input([out], [*_rig_outputs(args.rig), args.definitions])
+    _check_outputs([out], [*_rig_outputs(args.rig), args.definitions])
     # read and checked before the rig: a bad file is refused without loading (or fitting) anything
     watch = stopwatch()
     definitions = load_expressions(args.definitions) if args.definitions else None
@@ -205,7 +215,7 @@ def cmd_landmarks(args):
     if args.source and args.assist:
         raise AutobonesError("--from reads every landmark from a file and --assist proposes them from a few: "
                              "give one of them")
-    _never_the_input([out, args.preview], [args.head, args.source, args.assist])
+    _check_outputs([out, args.preview], [args.head, args.source, args.assist])
     watch = stopwatch()
     V, F = autobones.load_mesh(args.head)
     watch.lap("load")
@@ -301,6 +311,11 @@ def cmd_build_rig(args):
         if inp and (os.path.realpath(inp) == folder or os.path.realpath(inp).startswith(folder + os.sep)):
             raise AutobonesError(f"{args.output}: the output folder holds the input {inp}, and is replaced as a "
                                  "whole; choose another folder (-o)")
+    from autobones.io.atomic import output_folder
+
+    output_folder(args.output)   # its parent, before the build: a mistyped -o costs nothing
+    if os.path.exists(args.output) and not os.path.isdir(args.output):
+        raise AutobonesError(f"{args.output}: exists and is not a folder; the rig is written as a folder (-o)")
     t = time.perf_counter()
     shapes = None
     if args.shapes:  # read and checked before anything is built or written
@@ -405,7 +420,7 @@ def cmd_export(args):
     from autobones.export import export_format
 
     # the output naming the input first: `export a.glb -o a.glb` is that, not a question of suffix
-    _never_the_input([args.output], [args.rig, *_rig_outputs(args.rig)[1:]])
+    _check_outputs([args.output], [args.rig, *_rig_outputs(args.rig)[1:]])
     fmt = export_format(args.output)
     t = time.perf_counter()
     if fmt == "usd":
@@ -444,7 +459,7 @@ def cmd_animate(args):
 
     if not args.output.lower().endswith(".glb"):
         raise AutobonesError(f"{args.output}: the animation is written as a .glb")
-    _never_the_input(_rig_outputs(args.output), [*_rig_outputs(args.rig), args.capture])
+    _check_outputs(_rig_outputs(args.output), [*_rig_outputs(args.rig), args.capture])
     t = time.perf_counter()
     watch = stopwatch()
     capture = read_capture(args.capture, fps=number(args.fps, "--fps"))

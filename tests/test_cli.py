@@ -177,6 +177,46 @@ def test_a_folder_in_the_way_of_a_sidecar_leaves_nothing(tmp_path, sidecar):
     assert os.listdir(tmp_path) == [sidecar] and os.listdir(tmp_path / sidecar) == []
 
 
+@pytest.mark.parametrize("command", ["place", "transfer"])
+@pytest.mark.parametrize("out, needle", [("nope/x.glb", "does not exist"), ("x.fbx", "must be a .glb"),
+                                         ("dir.glb", "folder of that name"), ("x.rig.json", "must be a .glb"),
+                                         ("d.glb", "d.rig.json: a folder"), ("/proc/x.glb", "cannot write in")])
+def test_an_output_that_cannot_be_written_is_refused_before_any_work(tmp_path, monkeypatch, capsys, command,
+                                                                     out, needle):
+    """A mistyped -o used to be found by the save, after the rig (100 s for a 213k scan with --arkit)."""
+    import autobones
+    from cli.main import main
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the head was read before the output was checked")
+
+    for name in ("place", "transfer", "load_mesh"):
+        monkeypatch.setattr(autobones, name, no_work)
+    (tmp_path / "dir.glb").mkdir()
+    (tmp_path / "d.rig.json").mkdir()
+    monkeypatch.chdir(tmp_path)
+    head = str(data("misc/robot_head_neutral.obj"))
+    lm = str(ROOT / "tests" / "landmarks" / "robot_head_neutral.landmarks.json")
+    args = [command, head, "-o", out] + (["--landmarks", lm] if command == "transfer" else [])
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0], err
+    assert sorted(os.listdir(tmp_path)) == ["d.rig.json", "dir.glb"]
+
+
+def test_build_rig_output_refused_before_the_build(tmp_path, monkeypatch, capsys):
+    import autobones
+    from cli.main import main
+
+    monkeypatch.setattr(autobones, "build_rig", lambda *a, **k: pytest.fail("built before the output was checked"))
+    (tmp_path / "afile").write_text("")
+    lm = str(ROOT / "tests" / "landmarks" / "robot_head_neutral.landmarks.json")
+    for out, needle in (("nope/rig", "does not exist"), ("afile", "is not a folder")):
+        assert main(["build-rig", str(data("misc/robot_head_neutral.obj")), "--landmarks", lm, "-o",
+                     str(tmp_path / out)]) == 2
+        assert needle in capsys.readouterr().err
+
+
 @pytest.fixture(scope="module")
 def robot_glb(tmp_path_factory):
     """The robot head as a plain glb mesh, its landmarks beside it, and a transferred rig of it."""

@@ -145,6 +145,24 @@ def refuse_overwriting_inputs(outputs, inputs):
                                      "replaces its input, choose another output name")
 
 
+def check_outputs(outputs, inputs=(), what="the output"):
+    """Every check a group of outputs can fail before any work is done: none is an input
+    (:func:`refuse_overwriting_inputs`), each one's folder exists and takes a new file (one is made
+    and removed), and no folder or special file stands where one goes (:func:`check_destination`).
+
+    ``outputs`` and ``inputs`` are paths (None entries ignored). A command calls it first, so a
+    mistyped ``-o`` costs nothing instead of the minutes a large head takes to rig.
+    """
+    refuse_overwriting_inputs(outputs, inputs)
+    for out in outputs:
+        if out is None:
+            continue
+        check_destination(out, what)
+        fd, tmp = temp_beside(out, suffix=".probe")   # a read-only folder or /proc: refused here
+        os.close(fd)
+        os.unlink(tmp)
+
+
 def probe_folder(folder, what="the output folder"):
     """Create ``folder`` (and its parents) if needed and check that a file can be written in it,
     with a temporary file removed at once; AutobonesError naming the folder otherwise."""
