@@ -43,6 +43,29 @@ def test_skin_surface_is_the_largest_part_without_the_eyes():
     assert np.allclose(s.relax_degree, np.asarray(s.relax_weights.sum(axis=1)).ravel())
 
 
+def test_diffusions_over_one_time_share_a_factorisation_inside_the_block(monkeypatch):
+    import autobones.expressions.surface as surface_module
+    from autobones.geometry.laplacian import diffuse
+
+    V, F = grid(15)
+    s = skin_surface(V, F, [], PARAMS["skull_smoothing_passes"])
+    u = np.zeros(len(V))
+    u[len(V) // 2] = 1.0
+    alone = s.diffuse(u, 0.01)
+    assert np.array_equal(alone, diffuse(u, s.laplacian, s.mass, 0.01))   # as the plain heat step
+    assert alone.max() < 1.0 and alone.min() > 0.0 and abs((s.mass @ alone).sum() - (s.mass @ u).sum()) < 1e-12  # heat kept
+    made = []
+    real = surface_module.factor_spd
+    monkeypatch.setattr(surface_module, "factor_spd", lambda A: made.append(A.shape) or real(A))
+    with s.sharing_factors():
+        a, b = s.diffuse(u, 0.01), s.diffuse(np.c_[u, 2 * u], 0.01)
+        c = s.diffuse(u, 0.02)
+    assert len(made) == 2                                   # 0.01 once, 0.02 once
+    assert np.array_equal(a, alone) and np.array_equal(b[:, 0], alone) and not np.array_equal(c, alone)
+    s.diffuse(u, 0.01)
+    assert len(made) == 3 and s._factors is None           # dropped after the block
+
+
 def test_the_mouth_line_splits_upper_from_lower_lip():
     V, F = grid(41)
     N = np.tile([0.0, 0.0, 1.0], (len(V), 1))

@@ -60,10 +60,10 @@ from .lids import (LIDS, attach_hinge_share, attach_lid_weights, lid_attachments
                    margin_release, ride_lids)
 from .mouth import mouth_corners, mouth_line
 from .mouth_parts import inner_mouth_parts, mouth_part_weights
-from .muscles import influence_fields, muscles_from_rig
+from .muscles import check_muscle_kinds, influence_fields, muscles_from_rig
 from .rig_inputs import rig_inputs
 from .skull import REGIONS_DEFAULT, skull_clamp, slide_over_bone, tissue_thickness
-from .sphincters import is_sheet, is_sphincter
+from .sphincters import is_sphincter
 from .surface import skin_surface
 from .unfold import flipped_faces
 from .unfold import unfold as unfold_folds
@@ -84,23 +84,6 @@ def face_unit(landmarks, eyes):
         return 1.48 * float(np.linalg.norm(eyes["l"] - eyes["r"]))
     raise AutobonesError("expressions: the rig has neither exocanthion landmarks nor both eye bones "
                          "to measure the face by")
-
-
-def _check_muscle_kinds(muscles, types):
-    """One clear error when a rig's muscle was built as one kind (its record's ``kind``: linear,
-    "sphincter" or "sheet") and the definitions move its type as another (a rig transferred before
-    mentalis became a sheet, posed with today's definitions): its field would be read as the wrong
-    shape. The rig's own sidecar definitions always match it."""
-    for m in muscles:
-        t = types.get(m.get("type"))
-        if t is None:
-            continue
-        built = m.get("kind", "linear")
-        moved = "sheet" if is_sheet(t) else "sphincter" if is_sphincter(t) else "linear"
-        if built != moved:
-            raise AutobonesError(f"muscle {m.get('name')!r} is a {built} muscle in this rig but the expression "
-                                 f"definitions move its type {m.get('type')!r} as a {moved}: pose it with the "
-                                 "definitions saved with the rig, or transfer the head again")
 
 
 class ExpressionModel:
@@ -177,7 +160,7 @@ class ExpressionModel:
             if not is_sphincter(types[t]) and not {"wire", "dropoff"} <= set(types[t]):
                 raise AutobonesError(f"expression definitions: muscle type {t!r} needs 'wire' and 'dropoff' "
                                      "(a linear muscle), or a 'sphincter' or 'sheet' entry")
-        _check_muscle_kinds(rig.muscles, types)
+        check_muscle_kinds(rig.muscles, types)
         self.muscle_names_ = list(mj.names)
         L = {kk: frame.to_canonical(np.asarray(v, dtype=np.float64).reshape(1, 3))[0]
              for kk, v in inputs.landmarks.items()}
@@ -209,12 +192,13 @@ class ExpressionModel:
         creases = crease_fields(V, N, skin, infl, mj.types, mj.insertions, mouth.stomion[0], fu, p["creases"])
 
         lid = p["eyelids"]
-        lw, self.lid_close_deg_, self.lid_pivots_ = lid_weights(V, F, skin, L, eyes, fu, lid, surf)
+        with surf.sharing_factors():  # the lid weights and the hinges' share diffuse over the same time
+            lw, self.lid_close_deg_, self.lid_pivots_ = lid_weights(V, F, skin, L, eyes, fu, lid, surf)
+            hp, ha, hc, share, hinged = lid_hinges(V, skin, L, eyes, fu, lid, surf)
         self.lid_lower_range_ = float(lid["lower_range"])
         self.attached_, source, parts = lid_attachments(V, skin, surf.part, eye_w, lw.max(axis=0), fu,
                                                         lid["attached_part_size"])
         self.lid_weights_ = attach_lid_weights(lw, self.attached_, source, parts)
-        hp, ha, hc, share, hinged = lid_hinges(V, skin, L, eyes, fu, lid, surf)
         self.lid_hinges_ = (hp, ha, hc, attach_hinge_share(share, lw, self.attached_, source, parts), hinged)
         self.muscle_basis_, self.crease_basis_ = ride_lids(G, creases, margin_release(lw, lid["margin_hold"]),
                                                            self.attached_, source)

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import AutobonesError
 from .rig_inputs import rig_inputs
+from .sphincters import is_sheet, is_sphincter
 
 
 @dataclass
@@ -141,3 +142,20 @@ def influence_fields(fields, names, n):
         if f is not None:
             infl[i] = np.asarray(f, dtype=np.float64).reshape(n)
     return infl
+
+
+def check_muscle_kinds(muscles, types):
+    """One clear error when a rig's muscle was built as one kind (its record's ``kind``: linear,
+    "sphincter" or "sheet") and the definitions move its type as another (a rig transferred before
+    mentalis became a sheet, posed with today's definitions): its field would be read as the wrong
+    shape. The rig's own sidecar definitions always match it."""
+    for m in muscles:
+        t = types.get(m.get("type"))
+        if t is None:
+            continue
+        built = m.get("kind", "linear")
+        moved = "sheet" if is_sheet(t) else "sphincter" if is_sphincter(t) else "linear"
+        if built != moved:
+            raise AutobonesError(f"muscle {m.get('name')!r} is a {built} muscle in this rig but the expression "
+                                 f"definitions move its type {m.get('type')!r} as a {moved}: pose it with the "
+                                 "definitions saved with the rig, or transfer the head again")
