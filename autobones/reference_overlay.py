@@ -14,6 +14,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .geometry.rotations import similarity
 from .geometry.sample import sample_surface
 
 SAMPLE_COUNT = 3000
@@ -99,14 +100,11 @@ def overlay_score(P, up, front, ref, iterations=30, max_turn=35.0):
             break  # the same matches give the same similarity: a fixed point, every later step equal
         last = (j, keep)
         A, B = Q[keep], ref[j[keep]]
-        # Umeyama: the similarity B ~ s rot A + t in least squares
         Am, Bm = A.mean(axis=0), B.mean(axis=0)
-        U, S, Wt = np.linalg.svd((B - Bm).T @ (A - Am))
-        D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Wt))])
-        new_rot = U @ D @ Wt
+        scale, new_rot = similarity(A, B)   # B ~ s rot A + t in least squares
         if np.degrees(np.arccos(np.clip((np.trace(new_rot) - 1) / 2, -1, 1))) <= max_turn:
             rot = new_rot
-        s = float(np.clip((S * np.diag(D)).sum() / ((A - Am) ** 2).sum(), 0.5, 2.0))
+        s = float(np.clip(scale, 0.5, 2.0))
         t = Bm - s * Am @ rot.T
     X = s * Q @ rot.T + t
     d1, _ = ref_tree.query(X)

@@ -7,7 +7,7 @@ from autobones.errors import AutobonesError
 from autobones.geometry import laplacian as lap
 from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
-from autobones.geometry.rotations import rotate_between, similarity
+from autobones.geometry.rotations import polar_rotations, rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
                                          weld_by_size, without_large_parts)
@@ -188,6 +188,21 @@ def test_similarity_recovers_a_scaled_turned_point_set_and_never_mirrors():
     assert abs(s - 2.5) < 1e-12 and np.abs(R - R0).max() < 1e-12
     s, R = similarity(P, P * [-1.0, 1.0, 1.0])        # a mirror image: the best proper rotation
     assert np.linalg.det(R) > 0
+
+
+def test_polar_rotations_are_the_nearest_proper_rotations():
+    rng = np.random.default_rng(4)
+    R0 = np.linalg.qr(rng.standard_normal((50, 3, 3)))[0]
+    R0 *= np.sign(np.linalg.det(R0))[:, None, None]
+    S = np.einsum("kij,kj->kij", np.eye(3)[None].repeat(50, 0), rng.uniform(0.5, 2.0, (50, 3)))
+    R = polar_rotations(R0 @ S)                       # a rotation times a stretch: the rotation
+    assert np.abs(R - R0).max() < 1e-12
+    mirrored = R0 * np.array([1.0, 1.0, -1.0])        # det -1: a proper rotation, no nearer one
+    Rm = polar_rotations(mirrored)
+    assert np.allclose(np.linalg.det(Rm), 1.0) and np.allclose(Rm @ Rm.transpose(0, 2, 1), np.eye(3))
+    closest = np.linalg.norm(Rm - mirrored, axis=(1, 2))
+    for turn in (np.diag([-1.0, 1.0, 1.0]), np.diag([1.0, -1.0, 1.0])):  # other proper candidates
+        assert (closest <= np.linalg.norm(mirrored @ turn - mirrored, axis=(1, 2)) + 1e-12).all()
 
 
 def test_rotate_between_takes_a_to_b_and_keeps_lengths():

@@ -49,6 +49,7 @@ from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import cross_rows, triangle_normals
+from ..geometry.rotations import polar_rotations
 from ..geometry.topology import mesh_parts
 
 log = logging.getLogger(__name__)
@@ -70,15 +71,6 @@ def _inverse(E):
     out = np.zeros_like(E)
     out[ok] = np.linalg.inv(E[ok])
     return out
-
-
-def polar_rotations(M):
-    """The rotation factor of each (3, 3) matrix (polar decomposition, det +1), (m, 3, 3)."""
-    U, _, Vt = np.linalg.svd(M)
-    d = np.sign(np.linalg.det(U @ Vt))
-    d[d == 0] = 1.0
-    U[:, :, 2] *= d[:, None]
-    return U @ Vt
 
 
 def gradient_operator(V, F):

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from ..geometry.rotations import similarity
+
 from ..errors import AutobonesError, counted
 
 
@@ -27,8 +29,7 @@ def rigid_align(V, V_rest, keep=0.5, iterations=5):
     for _ in range(iterations):
         a, b = X[sel], V_rest[sel]
         ca, cb = a.mean(axis=0), b.mean(axis=0)
-        U, _, Wt = np.linalg.svd((a - ca).T @ (b - cb))
-        R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Wt))]) @ Wt
+        R = similarity(b, a)[1]   # takes b onto a as columns, so a onto b as rows
         X = (X - ca) @ R + cb
         d = np.linalg.norm(X - V_rest, axis=1)
         sel = np.argsort(d, kind="stable")[: max(3, int(keep * len(V)))]

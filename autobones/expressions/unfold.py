@@ -17,6 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..geometry.normals import triangle_normals
+from ..geometry.rotations import similarity
 
 
 def turned_faces(P, F, n0):
@@ -180,9 +181,7 @@ def _ring_maps(X, Y):
     """Maps ``y ~ M (x - mx) + my`` fitted to ring points ``X`` -> ``Y`` (r, 3): the rigid one,
     and the affine one when it keeps orientation. Returns (list of (3, 3), mx, my)."""
     mx, my = X.mean(axis=0), Y.mean(axis=0)
-    U, _s, Vt = np.linalg.svd((X - mx).T @ (Y - my))
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    maps = [(U @ D @ Vt).T]
+    maps = [similarity(Y, X)[1].T]   # takes Y onto X as columns: its transpose takes X onto Y
     if len(X) >= 4:
         Aff = np.linalg.lstsq(X - mx, Y - my, rcond=None)[0].T
         if np.linalg.det(Aff) > 0:

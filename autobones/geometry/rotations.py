@@ -1,5 +1,5 @@
 """Rotations: about the axes, from Euler angles, between two directions, the best similarity between point sets,
-the +X turn of points and their turn about any axis, the 24 axis turns."""
+the rotation factors of matrices, the +X turn of points and their turn about any axis, the 24 axis turns."""
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -75,6 +75,16 @@ def similarity(P, Q):
     R = U @ D @ Vt
     s = float(np.trace(np.diag(S) @ D) / max((P0 ** 2).sum(), 1e-300))
     return s, R
+
+
+def polar_rotations(M):
+    """The rotation factor of each (3, 3) matrix of ``M`` (m, 3, 3) (polar decomposition, made proper:
+    det +1, the nearest rotation to a mirroring map), (m, 3, 3); applied as the matrices were."""
+    U, _, Vt = np.linalg.svd(M)
+    d = np.sign(np.linalg.det(U @ Vt))
+    d[d == 0] = 1.0
+    U[:, :, 2] *= d[:, None]
+    return U @ Vt
 
 
 def x_turn(P, angle):

@@ -36,6 +36,7 @@ import numpy as np
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
+from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
 from ..geometry.validate import mesh_arrays
 from ..geometry.winding import outward_faces
@@ -333,12 +334,8 @@ def face_distance(given, reference):
     B = np.array([reference[n] for n in REQUIRED], dtype=np.float64)
     A = (A - A.mean(axis=0)) / np.linalg.norm(A[0] - A[1])
     B = (B - B.mean(axis=0)) / np.linalg.norm(B[0] - B[1])
-    U, S, Vt = np.linalg.svd(B.T @ A)
-    d = np.sign(np.linalg.det(U @ Vt))   # a proper rotation (a mirrored face is not the same face)
-    S[-1] *= d
-    U[:, -1] *= d
-    scale = S.sum() / (A ** 2).sum()
-    return float(np.sqrt(((scale * A @ (U @ Vt).T - B) ** 2).sum(axis=1).mean()))
+    scale, R = similarity(A, B)   # a proper rotation (a mirrored face is not the same face)
+    return float(np.sqrt(((scale * A @ R.T - B) ** 2).sum(axis=1).mean()))
 
 
 def _read_names(fit, V, F, where, given, unit):

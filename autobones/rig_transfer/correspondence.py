@@ -116,7 +116,7 @@ from ..geometry.closest import closest_points
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import vertex_normals
 from ..geometry.proxy import quadric_simplify
-from ..geometry.rotations import rotate_between
+from ..geometry.rotations import polar_rotations, rotate_between
 from ..geometry.topology import boundary_vertices, mesh_edges, mesh_parts
 from ..geometry.validate import mesh_arrays
 from ..geometry.tps import ThinPlateSpline, as_points, landmark_arrays
@@ -178,10 +178,7 @@ def rigid_turn(A):
     reference 37 degrees off and the fit twisted the generic about its normals (p95 40-60% of ex-ex
     from the as-is correspondence, mapped back).
     """
-    U, _, Vt = np.linalg.svd(np.asarray(A, dtype=np.float64))
-    if np.linalg.det(U @ Vt) < 0:   # mirrored landmarks: the nearest proper rotation
-        U = U * np.array([1.0, 1.0, -1.0])
-    return U @ Vt
+    return polar_rotations(np.asarray(A, dtype=np.float64)[None])[0]   # mirrored landmarks: the nearest proper one
 
 
 def _source_terms(V_src, F_src, X, tps, P, edge_reference):

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from ..errors import AutobonesError, counted
 from ..geometry.closest import closest_points
 from ..geometry.laplacian import clipped_cotangent_laplacian, factor_spd
+from ..geometry.rotations import polar_rotations
 from ..geometry.topology import weld
 
 
@@ -93,10 +94,7 @@ def local_frames(V_rest, V_stuck, F, face):
     ok = (area_rest > 1e-12 * max(area_rest.max(initial=0.0), 1e-300)) & (area_stuck > 0)
     eye = np.broadcast_to(np.eye(3), A.shape)
     J = np.where(ok[:, None, None], B, eye) @ np.linalg.inv(np.where(ok[:, None, None], A, eye))
-    U, _, Vt = np.linalg.svd(J)
-    flip = np.linalg.det(U @ Vt) < 0           # nearest proper rotation
-    U[flip, :, 2] *= -1.0
-    R = U @ Vt
+    R = polar_rotations(J)
     scale = np.where(ok, np.sqrt(area_stuck / np.where(ok, area_rest, 1.0)), 1.0)
     return R, scale
 

@@ -25,7 +25,6 @@ distance) unless stated. Arrays numpy; deterministic.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..geometry.topology import mesh_edges
 
