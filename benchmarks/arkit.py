@@ -326,10 +326,10 @@ LIP_SHAPES = ("jawOpen", "mouthFunnel", "mouthLowerDownLeft", "mouthShrugUpper")
 
 def lips():
     """transfer --arkit on each of :data:`FOLD_HEADS` with and without the lip line set free
-    (:func:`autobones.arkit.targets.mouth_fissure`): how jawOpen and a few mouth shapes move the
+    (:func:`autobones.arkit.fissures.mouth_fissure`): how jawOpen and a few mouth shapes move the
     upper and lower lip, beside ICT's own shapes on its own skin, and the folds left."""
     import autobones
-    from autobones.arkit.targets import lip_motion, mouth_fissure
+    from autobones.arkit.fissures import lip_motion, mouth_fissure
 
     data = os.path.join(ROOT, "..", "shared", "data")
     S = load_shapes()

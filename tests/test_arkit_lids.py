@@ -9,7 +9,8 @@ from autobones.arkit.deformation_transfer import DeformationTransfer
 from autobones.arkit.lids import LidClosure, canthal_parameter, eye_sides, gap_closure, margin_points
 from autobones.arkit.names import ARKIT_NAMES
 from autobones.arkit.shapes import load_shapes
-from autobones.arkit.targets import CORRESPONDENCE, arkit_targets, lip_motion, mouth_fissure
+from autobones.arkit.fissures import lip_motion, mouth_fissure
+from autobones.arkit.targets import CORRESPONDENCE, arkit_targets
 from autobones.orient import Frame
 from shared_data import data
 
@@ -119,7 +120,7 @@ def test_james_lids_fold_no_more_than_before(james):
 
 
 def test_lids_change_only_the_shapes_that_move_lids(james):
-    from autobones.arkit.targets import eye_fissures
+    from autobones.arkit.fissures import eye_fissures
 
     S = load_shapes()
     V, F = james.vertices, james.faces

@@ -34,7 +34,8 @@ except ImportError as exc:  # never skip: the test extra installs usd-core
 
 from autobones.export.source import read_rig_source
 from autobones.export.usd import (all_influences, guess_meters_per_unit, joint_paths, unique_identifiers,
-                                  validate_stage, write_animation, write_usd)
+                                  write_animation, write_usd)
+from autobones.export.usd_file import validate_stage
 
 ROOT = Path(__file__).resolve().parents[1]
 TOL = 1e-5  # of the head size

@@ -189,7 +189,7 @@ class DeformationTransfer:
             none are anchored at 0. None: nothing anchored but by screening.
         free : (m_t,) bool, optional
             Target triangles to treat as over a hole of the source even where it covers them
-            (a scan's eye surface between the lids: :func:`autobones.arkit.targets.eye_fissures`).
+            (a scan's eye surface between the lids: :func:`autobones.arkit.fissures.eye_fissures`).
         pinned : (p,) int, optional
             Target vertices whose displacements :meth:`transform` may be given (``pins``): soft
             positional constraints weighted ``pin_weight`` times the Laplacian's mean diagonal,

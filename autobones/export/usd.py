@@ -37,8 +37,6 @@ from __future__ import annotations
 
 import math
 import os
-import contextlib
-import tempfile
 
 import numpy as np
 
@@ -47,17 +45,9 @@ from ..arguments import finite_output
 from ..io.atomic import check_destination, refuse_overwriting_inputs, replace_all, temp_beside
 from . import USD_SUFFIXES
 from .source import read_rig_source
+from .usd_file import export_stage, pxr_modules, usd_errors, validate_stage
 
-INSTALL = "USD export needs usd-core: pip install 'autobones[usd]' (or pip install usd-core)"
 HUMAN_HEAD_M = 0.3   # a human head's size in metres (the frame's scale of the built-in head: 0.31)
-
-
-def _pxr():
-    try:
-        from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt
-    except ImportError:
-        raise AutobonesError(INSTALL) from None
-    return Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt
 
 
 def guess_meters_per_unit(head_size):
@@ -70,7 +60,7 @@ def guess_meters_per_unit(head_size):
 
 def unique_identifiers(names, taken=()):
     """Valid USD prim names for ``names`` (list of str), distinct from each other and ``taken``."""
-    _, _, Tf, *_ = _pxr()
+    _, _, Tf, *_ = pxr_modules()
     out, used = [], set(taken)
     for name in names:
         name = str(name)
@@ -223,7 +213,7 @@ def skin_weights(W, max_influences=None):
 def build_stage(src, meters_per_unit=None, max_influences=None):
     """The UsdSkel stage (in memory) of a :class:`autobones.export.source.RigSource`; see the module doc.
     ``max_influences``: None keeps every weight, k keeps the glb's k largest (:func:`skin_weights`)."""
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = _pxr()
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = pxr_modules()
     rig = src.rig
     guessed = meters_per_unit is None
     mpu = guess_meters_per_unit(float(rig.frame.size)) if guessed else float(meters_per_unit)
@@ -338,7 +328,7 @@ def write_animation(stage, path, joints, time_codes, translations, rotations, sc
     shapes : list of str or None
         Blend shape names driven, with ``shape_weights`` (t, k) float.
     """
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = _pxr()
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdSkel, Vt = pxr_modules()
     anim = UsdSkel.Animation.Define(stage, path)
     anim.CreateJointsAttr(Vt.TokenArray(joints))
     ta, ra, sa = anim.CreateTranslationsAttr(), anim.CreateRotationsAttr(), anim.CreateScalesAttr()
@@ -382,80 +372,6 @@ def _add_vertex_primvars(mesh, rig, Sdf, UsdGeom, Vt):
             pv.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(a.astype(np.float32).ravel())))
 
 
-def validate_stage(stage_or_path):
-    """USD's own checks on a stage or a file: every validator registered with ``pxr.UsdValidation``,
-    the framework that replaced ``UsdUtils.ComplianceChecker`` (usd-core 26.11 has no compliance
-    checker); a release without the framework's ``ValidationContext`` runs the compliance checker.
-
-    Returns
-    -------
-    list of (str, str, str)
-        (``"Error"``/``"Warn"``/``"Info"``, error name, message) per finding; empty when clean.
-    """
-    _, _, _, Usd, *_ = _pxr()
-    try:
-        from pxr import UsdValidation
-
-        UsdValidation.ValidationContext  # noqa: B018 (usd-core >= 25.02)
-    except (ImportError, AttributeError):  # older usd-core: the compliance checker usdchecker ran then
-        from pxr import UsdUtils
-
-        path = stage_or_path if isinstance(stage_or_path, (str, os.PathLike)) else \
-            stage_or_path.GetRootLayer().realPath
-        checker = UsdUtils.ComplianceChecker(skipARKitRootLayerCheck=True)
-        checker.CheckCompliance(os.fspath(path))
-        return ([("Error", "compliance", m) for m in checker.GetErrors() + checker.GetFailedChecks()]
-                + [("Warn", "compliance", m) for m in checker.GetWarnings()])
-    stage = Usd.Stage.Open(os.fspath(stage_or_path)) if isinstance(stage_or_path, (str, os.PathLike)) \
-        else stage_or_path
-    registry = UsdValidation.ValidationRegistry()
-    ctx = UsdValidation.ValidationContext(registry.GetOrLoadAllValidators())
-    out = []
-    for e in ctx.Validate(stage):
-        if e.HasNoError():
-            continue
-        out.append((e.GetType().displayName if hasattr(e.GetType(), "displayName") else str(e.GetType()),
-                    str(e.GetName()), str(e.GetMessage())))
-    return out
-
-
-def _export(stage, tmp, out_path, ext):
-    """Write ``stage`` to the temporary ``tmp`` (``out_path``'s format)."""
-    if ext == ".usdz":
-        from pxr import UsdUtils
-
-        with tempfile.TemporaryDirectory(prefix="autobones-usdz-") as work:
-            inner = os.path.join(work, os.path.splitext(os.path.basename(out_path))[0] + ".usdc")
-            if not stage.GetRootLayer().Export(inner):
-                raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-            os.remove(tmp)  # the packager refuses to replace a file
-            if not UsdUtils.CreateNewUsdzPackage(inner, tmp):
-                raise AutobonesError(f"{out_path}: usd-core could not write the .usdz package")
-    elif not stage.GetRootLayer().Export(tmp, args={"format": "usda" if ext == ".usda" else "usdc"}):
-        raise AutobonesError(f"{out_path}: usd-core could not write the stage")
-
-
-@contextlib.contextmanager
-def usd_errors(out_path):
-    """USD's errors while writing ``out_path`` as one AutobonesError line. Without a ``Tf.Error.Mark``
-    usd-core prints each error itself (a full disk: thousands of lines as the check then read the
-    truncated file) and carries on; under one, the first error raises ``Tf.ErrorException`` here."""
-    from pxr import Tf
-
-    mark = Tf.Error.Mark()
-    mark.SetMark()
-    try:
-        yield
-    except Tf.ErrorException as exc:
-        text = " ".join(str(exc).split())
-        why = "no space left on device" if "No space left" in text else text.split(" : ")[-1][:160] or "an error"
-        raise AutobonesError(f"{out_path}: usd-core could not write it ({why.strip(chr(39))})") from None
-    except OSError as exc:
-        raise AutobonesError(f"{out_path}: cannot write the USD file ({exc.strerror or exc})") from None
-    finally:
-        mark.Clear()
-
-
 def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
     """Write the rig saved as ``rig_path`` to ``out_path`` as a UsdSkel stage (see the module doc).
 
@@ -489,14 +405,14 @@ def write_usd(rig_path, out_path, meters_per_unit=None, max_influences=None):
         raise AutobonesError(f"{out_path}: a USD file ends in .usd, .usda, .usdc or .usdz, not {ext or 'nothing'!r}")
     refuse_overwriting_inputs([out_path], [rig_path])
     check_destination(out_path, "the USD file")
-    UsdGeom = _pxr()[4]
+    UsdGeom = pxr_modules()[4]
     src = read_rig_source(rig_path)
     stage = build_stage(src, meters_per_unit, max_influences)
     fd, tmp = temp_beside(out_path, suffix=ext)
     os.close(fd)
     try:
         with usd_errors(out_path):
-            _export(stage, tmp, out_path, ext)
+            export_stage(stage, tmp, out_path, ext)
             findings = validate_stage(tmp)
         replace_all([(tmp, out_path)], "the USD file")
     finally:  # a partial file (a full disk) never stays
