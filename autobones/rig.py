@@ -28,6 +28,9 @@ def sidecar_paths(glb_path):
 
 # what a ``.rig.json`` says it is (``format``); readers refuse anything else
 SIDECAR_FORMAT = "autobones-rig/1"
+# largest ARKit shape weight ``pose`` takes: ARKit's range is 0..1, an animator may overdrive a shape
+# (1.5); a negative weight turns a shape inside out (jawOpen=-5 sank the chin into the skull)
+ARKIT_MAX_WEIGHT = 2.0
 
 # Sidecar keys beyond the Rig's own (bones, labels, frame...), in the order they are written:
 # one order for every pipeline, so the JSON text does not depend on which one filled them
@@ -331,8 +334,9 @@ class Rig:
         return model.doc_ if model is not None else load_expressions((self.expressions or {}).get("definitions"))
 
     def arkit_offset(self, weights):
-        """Sum of ``weight * target`` (n, 3) of the ARKit shapes ``weights`` (dict name -> float),
-        or None when there are none; AutobonesError for a name the rig has no target for."""
+        """Sum of ``weight * target`` (n, 3) of the ARKit shapes ``weights`` (dict name -> float in
+        [0, :data:`ARKIT_MAX_WEIGHT`]), or None when there are none; AutobonesError for a name the rig
+        has no target for or a weight outside that range."""
         if weights is None or (isinstance(weights, dict) and not weights):
             return None
         if not isinstance(weights, dict):
@@ -354,6 +358,9 @@ class Rig:
                 raise AutobonesError(f"ARKit shape {name}: weight {w!r} is not a number") from None
             if not np.isfinite(w):
                 raise AutobonesError(f"ARKit shape {name}: weight {w} is not finite")
+            if not 0.0 <= w <= ARKIT_MAX_WEIGHT:
+                raise AutobonesError(f"ARKit shape {name}: weight {w:g} is outside [0, {ARKIT_MAX_WEIGHT:g}] "
+                                     "(ARKit's own range is 0..1; above 1 overdrives the shape)")
             out += w * np.asarray(targets[name], dtype=np.float64)
         return out
 

@@ -151,8 +151,8 @@ def add_pose(sub):
     q.add_argument("--head", dest="head_deg", metavar="PITCH,YAW,ROLL", help="head rotation, degrees")
     q.add_argument("--neck", dest="neck_deg", metavar="PITCH,YAW,ROLL", help="neck rotation, degrees")
     q.add_argument("--arkit", action="append", default=[], metavar="NAME=W",
-                   help="an ARKit shape (jawOpen, eyeBlinkLeft, ...) at weight W (default 1), on a rig made with "
-                        "transfer --arkit; repeat to mix; adds on top of AUs and bones")
+                   help="an ARKit shape (jawOpen, eyeBlinkLeft, ...) at weight W (default 1; ARKit's range 0..1, up to 2 "
+                        "overdrives it), on a rig made with transfer --arkit; repeat to mix; adds on top of AUs and bones")
     q.add_argument("--layer", choices=["auto", "shapes", "muscles"], default="auto",
                    help="what poses the AUs the au_arkit table maps (AU12 -> mouthSmile, AU26 -> jawOpen, ...; "
                         "--expression expands to its AUs): shapes = the head's own ARKit shapes (a rig made with "

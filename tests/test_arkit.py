@@ -233,6 +233,11 @@ def test_reloaded_rig_poses_the_same_and_mixing_adds(saved, ict_rig):
                                rig.pose(au={12: 0.5}) + 0.6 * rig.arkit_targets["jawOpen"], atol=1e-9)
     with pytest.raises(AutobonesError, match="did you mean 'jawOpen'"):
         rig.pose(arkit={"jawopen": 1})
+    for w in (-0.5, 2.5):   # outside [0, ARKIT_MAX_WEIGHT]: a negative jawOpen sank the chin into the skull
+        with pytest.raises(AutobonesError, match=r"jawOpen: weight .* is outside \[0, 2\]"):
+            rig.pose(arkit={"jawOpen": w})
+    np.testing.assert_allclose(rig.pose(arkit={"jawOpen": 1.5}) - rig.vertices, 1.5 * rig.arkit_targets["jawOpen"],
+                               atol=1e-12)   # an overdriven shape, as asked
     plain = autobones.transfer(data("ict/identity002.obj"), data("ict/identity002.landmarks.json"))
     with pytest.raises(AutobonesError, match="no ARKit shapes"):
         plain.pose(arkit={"jawOpen": 1})

@@ -112,6 +112,8 @@ def test_bad_input_one_line_exit_2_nothing_written(tmp_path, name):
     (["place", "nothere.obj"], "no such file"),
     (["place", "-o", "x.fbx"], ".glb"),
     (["place", "-o", "/nonexistent/dir/x.glb"], "does not exist"),
+    (["place", "."], "a folder, not a mesh file"),
+    (["pose", ".", "-o", "x.obj"], "a folder, not a rig"),
 ])
 def test_bad_options_one_line_exit_2(tmp_path, args, needle):
     r = run(args, tmp_path)

@@ -82,6 +82,13 @@ def test_missing_file():
         load_mesh("/nonexistent/head.obj")
 
 
+def test_a_folder_is_named_a_folder(tmp_path):
+    (tmp_path / "head.obj").mkdir()     # even with a mesh's name
+    for p in (tmp_path, tmp_path / "head.obj"):
+        with pytest.raises(AutobonesError, match="a folder, not a mesh file"):
+            load_mesh(p)
+
+
 def test_outputs_are_not_owner_only(tmp_path):
     """Outputs are written to a temporary file and renamed; they get the usual mode under the
     umask (mkstemp alone would leave them readable by their owner only)."""

@@ -59,6 +59,8 @@ def load_mesh(path, strays=False):
 
     path = path_argument(path, "path")
     name = os.path.basename(path)
+    if os.path.isdir(path):   # said as it is: "no such file" sent users looking for a typo
+        raise AutobonesError(f"{path}: a folder, not a mesh file")
     if not os.path.isfile(path):
         raise AutobonesError(f"{path}: no such file")
     ext = os.path.splitext(path)[1].lower()

@@ -128,6 +128,8 @@ def _arkit_targets(path, doc, body, record, n):
 
 def _read_autobones_glb(path):
     """(glTF JSON dict, binary chunk bytes) of a glb written by autobones; AutobonesError otherwise."""
+    if os.path.isdir(path):
+        raise AutobonesError(f"{path}: a folder, not a rig .glb")
     if not os.path.isfile(path):
         raise AutobonesError(f"{path}: no such file")
     try:
