@@ -300,6 +300,12 @@ def test_landmarks_off_the_surface(ict):
     shifted = {n: p + np.array([0.0, 0.0, 0.3 * head]) for n, p in lm.items()}
     msg = _error(validate_landmarks, shifted, V, F)
     assert "27 of 27" in msg and "own coordinates" in msg
+    # so far that a scale by 0.1-0.001 shrinks the set to a speck near the surface: no units hint (these
+    # were called millimetres for a mesh in centimetres, centimetres and millimetres for one in metres)
+    for heads in (3.0, 30.0, 300.0):
+        far_off = {n: p + np.array([0.0, 0.0, heads * head]) for n, p in lm.items()}
+        msg = _error(validate_landmarks, far_off, V, F)
+        assert "27 of 27" in msg and "own coordinates" in msg and "wrong units" not in msg
     # a looser tolerance accepts the single moved landmark
     assert len(validate_landmarks(moved, V, F, max_off_surface=0.3)) == 27
 
