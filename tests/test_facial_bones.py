@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from autobones.errors import AutobonesError
-from autobones.placement.facial_bones import DENSITIES, FacialBones, bone_count
+from autobones.placement.facial_bones import DENSITIES, FacialBones, bone_count, bones_for_mask
 
 MIRROR = np.array([-1.0, 1.0, 1.0])
 
@@ -63,5 +63,31 @@ def test_bone_counts():
 
 
 def test_too_few_points_is_a_clear_error():
-    with pytest.raises(AutobonesError, match="lower --density"):
+    with pytest.raises(AutobonesError, match=r"lower --density \(at most 5\)"):
         FacialBones(n_bones=10).fit(np.zeros((5, 3)))
+
+
+def test_a_named_density_fits_a_small_mask_and_a_number_is_taken_as_asked():
+    assert bones_for_mask(16, "medium", 5000) == 16 and bones_for_mask(8, "Sparse", 8) == 8   # enough: as asked
+    assert bones_for_mask(16, "medium", 10) == 5 and bones_for_mask(32, "dense", 1) == 1       # one per two vertices
+    assert bones_for_mask(16, 16, 10) == 16 and bones_for_mask(16, "16", 10) == 16            # a number: as asked
+
+
+def test_a_low_poly_head_takes_the_default_density_with_fewer_bones(caplog):
+    """A 63-vertex copy of the robot head: its facial mask (about 20 vertices) is too small for dense's 32
+    bones; the named density places one per two mask vertices and says so, a number is refused."""
+    import autobones
+    from autobones.geometry.proxy import quadric_simplify
+    from shared_data import data
+
+    V, F = autobones.load_mesh(data("misc/robot_head_neutral.obj"))
+    Vd, Fd = quadric_simplify(V, F.astype(np.int32), 1 - 50 / len(V))
+    head = (np.asarray(Vd, dtype=np.float64), np.asarray(Fd, dtype=np.int64))
+    with caplog.at_level("WARNING", logger="autobones"):
+        rig = autobones.place(head, density="dense")
+    mask = int(rig.facial_mask.sum())
+    assert mask < 32 and rig.options["facial_bones"] == mask // 2 and rig.options["facial_bones_asked"] == 32
+    assert sum(n.startswith("face_") for n in rig.skeleton.names) == mask // 2
+    assert abs(rig.weights.sum(axis=1) - 1).max() < 1e-9 and "too few for the 32 facial bones" in caplog.text
+    with pytest.raises(AutobonesError, match=f"at most {mask}"):
+        autobones.place(head, density=32)

@@ -42,6 +42,22 @@ def bone_count(density):
     return k
 
 
+def bones_for_mask(n_bones, density, mask_vertices):
+    """The facial bones a facial mask of ``mask_vertices`` vertices takes for ``density`` (asking
+    ``n_bones``, :func:`bone_count`).
+
+    A named density (sparse, medium, dense) asks for a level of detail: on a mask with fewer
+    vertices than its bones (a low-poly head: a dwarf statuette cut under its beard has 10, and
+    the default medium was refused) it gets one bone per two mask vertices (at least one). A number
+    is taken as asked (:class:`FacialBones` refuses more bones than mask vertices). Masks that
+    hold enough vertices are untouched.
+    """
+    named = isinstance(density, str) and density.strip().lower() in DENSITIES
+    if named and mask_vertices < n_bones:
+        return max(1, int(mask_vertices) // 2)
+    return n_bones
+
+
 def check_seed(value, what="random_state"):
     """``value`` as a Python int when it is a whole number >= 0 (numpy's generators take no
     other seed); AutobonesError naming ``what`` otherwise."""
@@ -99,7 +115,7 @@ class FacialBones:
         if len(X) < self.n_bones:
             raise AutobonesError(
                 f"the facial mask has {counted(len(X), 'vertex', 'vertices')}, fewer than the {self.n_bones} facial bones asked for; "
-                "use a lower --density")
+                f"use a lower --density (at most {len(X)}), or sparse, medium or dense, which fit the mask")
         rng = np.random.default_rng(self.random_state)
         best = None
         for _ in range(self.n_init):

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from .facial_bones import bone_count, check_seed, facial_bones
+from .facial_bones import bone_count, bones_for_mask, check_seed, facial_bones
 from ..io.mesh import resolve_mesh, wound_outward
 from ..io.parts import stray_parts, worn_parts
 from ..geometry.proxy import mesh_proxy
@@ -110,6 +110,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
         # has no neck to weigh
         seg.joints.cues["neck"].append("no_neck")
     lap("segment")
+    asked, n_bones = n_bones, _fewer_bones(n_bones, density, seg.facial_mask, source)
     heads, tails, model = facial_bones(C, F, seg.facial_mask, n_bones, random_state=random_state, surface=coarse)
     lap("facial")
     skel_c = _depth_skeleton(seg, heads, tails, n_bones)
@@ -117,6 +118,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     lap("weights")
     options = {"density": density if isinstance(density, str) else int(density), "facial_bones": n_bones,
                "up": up, "front": front, "random_state": random_state}
+    if n_bones != asked:
+        options["facial_bones_asked"] = asked
     joints = seg.joints.to_dict()
     if note:
         joints["head"]["face_landmarks"] = note   # why a face mask's pivot is the nose rule's
@@ -195,6 +198,17 @@ def jaw_angle(joint, menton, chin_front):
     return menton + ANGLE_SHARE[0] * dy, float(joint[2]) + ANGLE_SHARE[1] * dz
 
 
+def _fewer_bones(n_bones, density, mask, source):
+    """:func:`bones_for_mask` for the facial ``mask`` (n,) bool, with one warning naming the head
+    (``source``: its file, or None) when it places fewer bones than the density asks."""
+    n = bones_for_mask(n_bones, density, int(np.count_nonzero(mask)))
+    if n != n_bones:
+        log.warning("%sthe facial mask has %d vertices, too few for the %d facial bones of density %r: placed %d "
+                    "(sidecar options.facial_bones)", f"{source}: " if source else "", int(np.count_nonzero(mask)),
+                    n_bones, density, n)
+    return n
+
+
 def _no_neck(C, F, joints, frame):
     """Whether the head has no neck under its chin: no planar cut (``frame.cut``), no face mask, and
     its menton (``joints``, :mod:`.joints`) within ``NO_NECK`` head sizes of its lowest vertex (of
@@ -221,6 +235,7 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
     mask = base.labels == 0
     if region is not None:
         mask &= ~np.isin(region, [names.index(n) for n in ("neck", "ears", "scalp") if n in names])
+    asked, n_bones = n_bones, _fewer_bones(n_bones, density, mask, base.source)
     heads, tails, model = facial_bones(C, F, mask, n_bones, random_state=random_state)
     skel = base.skeleton
     jaw = skel.names.index("jaw") if "jaw" in skel.names else None
@@ -251,5 +266,7 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
     base.facial_mask = mask
     base.options.update({"command": "place", "density": density if isinstance(density, str) else int(density),
                          "facial_bones": n_bones, "random_state": random_state})
+    if n_bones != asked:
+        base.options["facial_bones_asked"] = asked
     base.facial_bone_partner = model.partner_.tolist()
     return base
