@@ -42,6 +42,18 @@ FORMAT = "autobones-labelled-rig/1"
 FILES = ("rig.json", "mesh.obj", "fields.npz")
 
 
+def check_rig_folder(folder):
+    """``(folder, parent)`` absolute, when :meth:`LabelledRig.save` can write ``folder``: its parent
+    exists and nothing but a folder stands there; AutobonesError naming it otherwise."""
+    folder = os.path.abspath(os.fspath(folder))
+    parent = os.path.dirname(folder)
+    if not os.path.isdir(parent):
+        raise AutobonesError(f"{folder}: the parent folder {parent} does not exist; create it first")
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise AutobonesError(f"{folder}: exists and is not a folder")
+    return folder, parent
+
+
 @dataclass
 class LabelledRig:
     """A head with its rig layers; all coordinates in the same frame and units.
@@ -144,12 +156,7 @@ class LabelledRig:
         replaces it (an existing rig folder is replaced as a whole).
         """
         self.check_fields()
-        folder = os.path.abspath(os.fspath(folder))
-        parent = os.path.dirname(folder)
-        if not os.path.isdir(parent):
-            raise AutobonesError(f"{folder}: the parent folder {parent} does not exist; create it first")
-        if os.path.exists(folder) and not os.path.isdir(folder):
-            raise AutobonesError(f"{folder}: exists and is not a folder")
+        folder, parent = check_rig_folder(folder)
         tmp = tempfile.mkdtemp(prefix="." + os.path.basename(folder) + "-", dir=parent)
         try:
             os.chmod(tmp, 0o755)

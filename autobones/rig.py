@@ -26,6 +26,14 @@ def sidecar_paths(glb_path):
     return base + ".rig.json", base + ".weights.npz"
 
 
+def rig_outputs(path):
+    """The three files :meth:`Rig.save` writes for ``path``: the glb and its sidecars
+    (:func:`sidecar_paths`); AutobonesError when ``path`` does not name a .glb."""
+    if not path.lower().endswith(".glb"):
+        raise AutobonesError(f"{path}: the output must be a .glb file")
+    return [path, *sidecar_paths(path)]
+
+
 # what a ``.rig.json`` says it is (``format``); readers refuse anything else
 SIDECAR_FORMAT = "autobones-rig/1"
 # largest ARKit shape weight ``pose`` takes: ARKit's range is 0..1, an animator may overdrive a shape
@@ -409,10 +417,8 @@ class Rig:
         from .arguments import path_argument
 
         path = path_argument(path, "path")
-        if not path.lower().endswith(".glb"):
-            raise AutobonesError(f"{path}: the output must be a .glb file")
-        json_path, npz_path = sidecar_paths(path)
-        targets = [path, json_path, npz_path]
+        targets = rig_outputs(path)
+        json_path, npz_path = targets[1:]
         for target in targets:  # every destination before any work: the message names the file in the way
             check_destination(target, "the rig")
         morphs, skipped = [], []

@@ -19,9 +19,9 @@ def cmd_place(args):
         raise AutobonesError("--expressions needs muscles, which place does not make; use "
                              "autobones transfer HEAD --landmarks FILE --expressions -o OUT.glb")
     head = args.head
-    out = _rig_glb(args.output or _default_out(head))
+    out = args.output or _default_out(head)
     random_state = seed(args.seed, "--seed")
-    _check_outputs(_rig_outputs(out), [head, args.landmarks])
+    _check_outputs(_rig_saved(out), [head, args.landmarks])
     t = time.perf_counter()
     with progress(args, "placing bones"):
         rig = autobones.place(head, density=args.density, up=args.up, front=args.front, random_state=random_state,
@@ -60,13 +60,11 @@ def _check_outputs(outputs, inputs):
     check_outputs(outputs, inputs)
 
 
-def _rig_glb(out):
-    """``out`` when it names a .glb (what ``Rig.save`` writes), refused at once otherwise."""
-    if not out.lower().endswith(".glb"):
-        from autobones.errors import AutobonesError
+def _rig_saved(out):
+    """The files ``Rig.save(out)`` writes, refused at once when ``out`` is no .glb."""
+    from autobones.rig import rig_outputs
 
-        raise AutobonesError(f"{out}: the output must be a .glb file")
-    return out
+    return rig_outputs(out)
 
 
 def _default_out(head):
@@ -77,13 +75,13 @@ def _default_out(head):
 def cmd_transfer(args):
     import autobones
 
-    out = _rig_glb(args.output or _default_out(args.head))
+    out = args.output or _default_out(args.head)
     if args.tissue and not (args.expressions or args.expression_sides):
         from autobones.errors import AutobonesError
 
         raise AutobonesError("--tissue refines the AU morph targets: add --expressions (or pose with "
                              "autobones pose RIG.glb --tissue)")
-    _check_outputs(_rig_outputs(out), [args.head, args.landmarks])
+    _check_outputs(_rig_saved(out), [args.head, args.landmarks])
     t = time.perf_counter()
     with progress(args, "transferring the rig" + (" and its ARKit shapes" if args.arkit else "")):
         rig = autobones.transfer(args.head, args.landmarks, rig=args.rig, up=args.up, front=args.front,
@@ -311,11 +309,9 @@ def cmd_build_rig(args):
         if inp and (os.path.realpath(inp) == folder or os.path.realpath(inp).startswith(folder + os.sep)):
             raise AutobonesError(f"{args.output}: the output folder holds the input {inp}, and is replaced as a "
                                  "whole; choose another folder (-o)")
-    from autobones.io.atomic import output_folder
+    from autobones.labelled_rig import check_rig_folder
 
-    output_folder(args.output)   # its parent, before the build: a mistyped -o costs nothing
-    if os.path.exists(args.output) and not os.path.isdir(args.output):
-        raise AutobonesError(f"{args.output}: exists and is not a folder; the rig is written as a folder (-o)")
+    check_rig_folder(args.output)   # before the build, as the save will: a mistyped -o costs nothing
     t = time.perf_counter()
     shapes = None
     if args.shapes:  # read and checked before anything is built or written

@@ -201,11 +201,11 @@ def jaw_angle(joint, menton, chin_front):
 def _fewer_bones(n_bones, density, mask, source):
     """:func:`bones_for_mask` for the facial ``mask`` (n,) bool, with one warning naming the head
     (``source``: its file, or None) when it places fewer bones than the density asks."""
-    n = bones_for_mask(n_bones, density, int(np.count_nonzero(mask)))
+    k = int(np.count_nonzero(mask))
+    n = bones_for_mask(n_bones, density, k)
     if n != n_bones:
         log.warning("%sthe facial mask has %d vertices, too few for the %d facial bones of density %r: placed %d "
-                    "(sidecar options.facial_bones)", f"{source}: " if source else "", int(np.count_nonzero(mask)),
-                    n_bones, density, n)
+                    "(sidecar options.facial_bones)", f"{source}: " if source else "", k, n_bones, density, n)
     return n
 
 
