@@ -1,4 +1,6 @@
 """autobones.io.mesh: vertex order kept, polygons fanned, bad files refused with one clear error."""
+import os
+
 import numpy as np
 import pytest
 import trimesh
@@ -87,6 +89,22 @@ def test_a_folder_is_named_a_folder(tmp_path):
     for p in (tmp_path, tmp_path / "head.obj"):
         with pytest.raises(AutobonesError, match="a folder, not a mesh file"):
             load_mesh(p)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_fifo_is_named_a_fifo_and_not_read(tmp_path):
+    """A named pipe given as the head (or a rig) is refused as what it is, before anything opens it
+    (opening one blocks until a writer comes); "no such file" sent users looking for a typo."""
+    from autobones.io.rig_files import load_rig
+
+    fifo = tmp_path / "head.obj"
+    os.mkfifo(fifo)
+    with pytest.raises(AutobonesError, match="a FIFO .named pipe., not a regular file; the head mesh must be a file"):
+        load_mesh(fifo)
+    glb = tmp_path / "rig.glb"
+    os.mkfifo(glb)
+    with pytest.raises(AutobonesError, match="a FIFO .named pipe., not a regular file; the rig must be a file"):
+        load_rig(glb)
 
 
 def test_outputs_are_not_owner_only(tmp_path):

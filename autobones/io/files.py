@@ -67,7 +67,9 @@ def limit_bytes(kind):
     return LIMITS[kind]
 
 
-def _refuse_not_regular(path, what, mode):
+def refuse_not_regular(path, what, mode):
+    """Raise the AutobonesError for ``path``, whose ``os.stat`` mode ``mode`` is no regular file
+    (a folder, a FIFO, a device, a socket), naming it as the ``what`` it was given as."""
     if stat.S_ISDIR(mode):
         kind = "a folder"
     elif stat.S_ISFIFO(mode):
@@ -80,6 +82,22 @@ def _refuse_not_regular(path, what, mode):
         kind = "not a regular file"
     raise AutobonesError(f"{shown(path)}: {kind}, not a regular file; the {what} must be a file on disk "
                          "(copy a stream to a file first)")
+
+
+def check_regular(path, what, folder_says):
+    """Refuse ``path`` unless it is a regular file: "no such file", ``folder_says`` for a folder (said
+    as it is: "no such file" sent users looking for a typo), :func:`refuse_not_regular` for a FIFO,
+    a device or a socket (reading one blocks or never ends). ``what`` names its role."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise AutobonesError(f"{shown(path)}: no such file") from None
+    except OSError as exc:
+        raise AutobonesError(f"{shown(path)}: cannot read the {what} ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(mode):
+        raise AutobonesError(f"{shown(path)}: {folder_says}")
+    if not stat.S_ISREG(mode):
+        refuse_not_regular(path, what, mode)
 
 
 def _a(what):
@@ -110,7 +128,7 @@ def read_bytes(path, kind, what=None):
     except OSError as exc:
         raise AutobonesError(f"{shown(path)}: cannot read the {what} ({exc.strerror or exc})") from None
     if not stat.S_ISREG(st.st_mode):
-        _refuse_not_regular(path, what, st.st_mode)
+        refuse_not_regular(path, what, st.st_mode)
     if st.st_size > limit:
         raise _too_large(path, what, kind, f"{st.st_size / MB:.1f} MB")
     try:
@@ -120,7 +138,7 @@ def read_bytes(path, kind, what=None):
         raise AutobonesError(f"{shown(path)}: cannot read the {what} ({exc.strerror or exc})") from None
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
-            _refuse_not_regular(path, what, os.fstat(fd).st_mode)
+            refuse_not_regular(path, what, os.fstat(fd).st_mode)
         parts, total = [], 0
         while total <= limit:  # bounded: never more than limit + 1 bytes, whatever the file claims
             chunk = os.read(fd, min(_CHUNK, limit + 1 - total))

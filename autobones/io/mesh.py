@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import AutobonesError, counted
 from ..geometry.normals import triangle_normals
 from ..geometry.topology import used_vertices
+from .files import check_regular
 from .obj import read_obj
 from .parts import stray_parts
 
@@ -59,10 +60,7 @@ def load_mesh(path, strays=False):
 
     path = path_argument(path, "path")
     name = os.path.basename(path)
-    if os.path.isdir(path):   # said as it is: "no such file" sent users looking for a typo
-        raise AutobonesError(f"{path}: a folder, not a mesh file")
-    if not os.path.isfile(path):
-        raise AutobonesError(f"{path}: no such file")
+    check_regular(path, "head mesh", "a folder, not a mesh file")
     ext = os.path.splitext(path)[1].lower()
     if ext not in SUPPORTED:
         raise AutobonesError(

@@ -17,7 +17,7 @@ import numpy as np
 from ..arguments import path_argument
 from ..errors import AutobonesError, counted
 from ..expressions.definitions import MODEL_DEFAULTS
-from .files import read_json, shown
+from .files import check_regular, read_json, shown
 from .rig_schema import SchemaError, check_sidecar, finite_float, no_constants
 from .gltf import read_accessor, read_glb
 from ..orient import Frame
@@ -128,10 +128,7 @@ def _arkit_targets(path, doc, body, record, n):
 
 def _read_autobones_glb(path):
     """(glTF JSON dict, binary chunk bytes) of a glb written by autobones; AutobonesError otherwise."""
-    if os.path.isdir(path):
-        raise AutobonesError(f"{path}: a folder, not a rig .glb")
-    if not os.path.isfile(path):
-        raise AutobonesError(f"{path}: no such file")
+    check_regular(path, "rig", "a folder, not a rig .glb")
     try:
         doc, body = read_glb(path)
     except (OSError, ValueError) as exc:
