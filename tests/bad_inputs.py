@@ -141,6 +141,9 @@ def mesh_cases():
         tip = V.mean(axis=0) + [0.0, k * size, 0.0]
         add(f"spike_{tag}.obj", obj_bytes(np.vstack([V, tip]), np.vstack([F, [[F[0, 0], F[0, 1], len(V)]]])),
             "failed", "outlier", f"one spike triangle {tag} head sizes long")
+    width = float(np.ptp(V[:, 0]))
+    add("two_heads.obj", obj_bytes(np.vstack([V, V + [1.3 * width, 0.0, 0.0]]), np.vstack([F, F + len(V)])), "failed",
+        "one head per file", "two heads side by side (rigged as one, the frame is found across both)")
     # bad indices
     add("huge_index.obj", obj_bytes(V, F) + b"f 1 2 99999999999999\n", "failed", "out of range",
         "a face index far beyond the vertex count")

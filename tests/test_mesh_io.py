@@ -390,3 +390,21 @@ def test_a_head_wearing_a_hat_is_rigged_as_the_bare_head(command):
     near = cKDTree(V).query(hat)[1]
     assert np.array_equal(worn.weights[len(V):], bare.weights[near])
     assert worn.options["worn_parts"]["parts"] == 1 and worn.options["worn_parts"]["vertices"] == len(hat)
+
+
+def test_several_heads_in_one_file_are_refused(tmp_path):
+    """Two heads side by side are one head per file, refused with one line (rigged as one, the frame
+    came out lying down); a second large part touching the head (a body modelled apart, a hat) is not."""
+    from autobones.io.mesh import check_mesh, default_head
+
+    V, F = default_head()
+    width = float(np.ptp(V[:, 0]))
+    for gap, refused in ((0.3 * width, True), (0.0, False)):
+        V2 = np.vstack([V, V + [width + gap, 0.0, 0.0]])
+        F2 = np.vstack([F, F + len(V)])
+        if refused:
+            with pytest.raises(AutobonesError, match=r"2 separate parts of head size stand apart \(50%, 50% of the "
+                                                     r"area.*one head per file"):
+                check_mesh(V2, F2, name="lineup")
+        else:
+            assert check_mesh(V2, F2, name="lineup")[0].shape == (2 * len(V), 3)

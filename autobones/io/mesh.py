@@ -21,7 +21,7 @@ from ..geometry.normals import triangle_normals
 from ..geometry.topology import used_vertices
 from .files import check_regular
 from .obj import read_obj
-from .parts import stray_parts
+from .parts import parts_apart, stray_parts
 
 log = logging.getLogger("autobones")
 
@@ -189,6 +189,13 @@ def check_mesh(V, F, name="mesh", strays=False, from_file=False):
     if extent.max() <= 0 or extent.min() < 1e-4 * extent.max():
         raise AutobonesError(f"{name}: the mesh is flat (extent {extent.tolist()}); a head has volume")
     _check_area(V, F, extent, name)
+    apart = parts_apart(V, F)
+    if apart is not None:
+        shares, gap = apart
+        raise AutobonesError(f"{name}: {len(shares)} separate parts of head size stand apart "
+                             f"({', '.join(f'{100 * a:.0f}%' for a in shares)} of the area, up to {gap:.2g} of a "
+                             "part's size between them): one head per file; split them (Blender: Mesh > Separate > "
+                             "By Loose Parts) and rig each")
     return V, F
 
 

@@ -24,6 +24,14 @@ log = logging.getLogger("autobones")
 # All fractions: the rule is scale-free.
 STRAY_AREA = 0.01
 STRAY_REACH = 1.0
+# Several heads in one file (a lineup, a sheet of variants): parts covering SIDE_SHARE of the area or
+# more each whose bounding boxes stand apart by SIDE_GAP of the larger box's side or more. Rigged as
+# one head, the frame is found across them (two default heads side by side came out up +z, front +y)
+# and every joint lies between them. A head modelled apart from the body it sits on, a hat, eyes and
+# teeth touch or overlap the head's box (the held-out dwarf's head and body: gap 0; no shared head
+# has two such parts apart).
+SIDE_SHARE = 0.2
+SIDE_GAP = 0.1
 
 
 class LeftOut:
@@ -142,6 +150,36 @@ def stray_parts(V, F):
         return None
     return LeftOut(V, F, ~stray[part] | ~np.isin(np.arange(len(V)), used), stray[face_part], dropped / total,
                    int(stray.sum()))
+
+
+def parts_apart(V, F):
+    """The large parts of ``(V, F)`` that stand apart (:data:`SIDE_SHARE`, :data:`SIDE_GAP`): several
+    heads in one file. Returns None, or ``(shares, gap)``: each such part's share of the area (k,),
+    largest first, and the largest gap between two of their boxes in the larger box's sides.
+
+    Parts are connected through shared positions (:func:`~autobones.geometry.topology.weld_by_size`).
+    ``V`` (n, 3) float, ``F`` (m, 3) int, any unit and frame.
+    """
+    from ..geometry.topology import part_areas, weld_by_size
+
+    Vw, Fw, _ = weld_by_size(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64))
+    part, area = part_areas(Vw, Fw)
+    big = np.flatnonzero(area >= SIDE_SHARE * area.sum())
+    if len(big) < 2:
+        return None
+    used = used_vertices(Fw, len(Vw))
+    lo = np.full((len(area), 3), np.inf)
+    hi = np.full((len(area), 3), -np.inf)
+    np.minimum.at(lo, part[used], Vw[used])
+    np.maximum.at(hi, part[used], Vw[used])
+    lo, hi = lo[big], hi[big]
+    gap = np.linalg.norm(np.maximum(np.maximum(lo[:, None] - hi[None], lo[None] - hi[:, None]), 0.0), axis=2)
+    side = (hi - lo).max(axis=1)
+    gap = gap / np.maximum(side[:, None], side[None])
+    if gap.max() < SIDE_GAP:
+        return None
+    apart = big[(gap >= SIDE_GAP).any(axis=1)]
+    return np.sort(area[apart] / area.sum())[::-1], float(gap.max())
 
 
 def worn_parts(V, F):
