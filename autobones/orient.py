@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -74,6 +74,14 @@ FACE_UNLIKE = 0.28
 # better than this share of the whole reference head stood on that cut does (the shared heads' front
 # halves and quarters: 0.25-0.70 of it; the zoo's wide-necked armadillo and beast: 0.85-0.94)
 FACE_VS_NECK = 0.75
+# a front told from the back by a small margin is said (``Frame.front_check``), so that rig gets a look or a
+# --front. By the reference's overlay: the best candidate's score against the best one facing the other way,
+# relative; the shared and held-out humans and busts 0.026-0.22, the robot heads 0.001-0.059 (their mirror
+# images taken from behind at 0.001 and 0.007), the falcon 0.013-0.019. By a neck cut: the share of the
+# midline profile's reach that lies ahead of the cut (:func:`autobones.cut_cues.cut_up_front`); the zoo's
+# animals 0.52-0.74, spot taken from behind at 0.58
+CLOSE_OVERLAY = 0.02
+CLOSE_CUT = 0.6
 
 
 @dataclass(frozen=True)
@@ -103,6 +111,12 @@ class Frame:
         animals and bodies). None: the rotation's own (no landmark marks the back of the head).
         The head, neck and eyes turn about :attr:`turn_axes`, and the exported joints take their roll
         (their +X) from its left.
+    front_check : dict or None
+        How clearly :func:`detect_frame` told the front from the back: ``told_by`` ("reference head"
+        or "neck cut"), ``margin`` (the reference's overlay: the best front's score against the best
+        facing the other way, relative; the neck cut: the share of the profile's reach ahead of it)
+        and ``close`` (under :data:`CLOSE_OVERLAY` / :data:`CLOSE_CUT`: check the rig, or give the
+        front). None when the front was given, or nothing faced the other way.
     """
 
     rotation: np.ndarray
@@ -111,6 +125,7 @@ class Frame:
     symmetry_error: float = float("nan")
     cut: tuple = None
     axes: np.ndarray = None
+    front_check: dict = None
 
     @property
     def turn_axes(self):
@@ -145,9 +160,11 @@ class Frame:
             raise TypeError(f"a frame is an object, not {type(d).__name__}")
         sym = d.get("symmetry_error")
         axes = d.get("axes")
+        check = d.get("front_check")
         return cls(np.asarray(d["rotation"], dtype=np.float64), np.asarray(d["origin"], dtype=np.float64),
                    float(d["head_size"]), float("nan") if sym is None else float(sym),
-                   axes=None if axes is None else np.asarray(axes, dtype=np.float64))
+                   axes=None if axes is None else np.asarray(axes, dtype=np.float64),
+                   front_check=None if check is None else dict(check))
 
     def to_dict(self):
         out = {
@@ -157,6 +174,8 @@ class Frame:
         }
         if self.axes is not None:
             out["axes"] = np.asarray(self.axes, dtype=np.float64).tolist()
+        if self.front_check is not None:
+            out["front_check"] = dict(self.front_check)
         return out
 
 
@@ -227,8 +246,8 @@ def detect_frame(V, F, up=None, front=None, reference=None):
         candidates = shape_candidates(P, normal, cues) if free else axis_candidates(normal, up_v, front_v)
 
     ref = default_reference() if reference is None else np.asarray(reference, dtype=np.float64)
-    up_d, front_d = _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v)
-    return _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err)
+    up_d, front_d, check = _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v)
+    return replace(_exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err), front_check=check)
 
 
 def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
@@ -236,7 +255,8 @@ def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
     (up, front) pairs): the one whose top slice best overlays the reference head ``ref`` ((k, 3)
     canonical sample), after the cut cues ``cues`` have ruled out ups (or marked a face-only
     capture), the angle refined when nothing is forced; a non-human head cut at the neck stands on
-    its cut. ``P`` (s, 3) the surface sample, ``normal`` (3,) and ``offset`` the symmetry plane."""
+    its cut. ``P`` (s, 3) the surface sample, ``normal`` (3,) and ``offset`` the symmetry plane.
+    Also returns how clearly the front was told (:attr:`Frame.front_check`, or None)."""
     free = up_v is None and front_v is None
     planar = is_planar_cut(cues)
     face_only = False
@@ -244,7 +264,7 @@ def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
     if len(candidates) > 1 and up_v is None:
         candidates, ref, face_only = cut_candidates(P, normal, candidates, cues, ref)
     if len(candidates) <= 1:
-        return candidates[0]
+        return (*candidates[0], None)
     if face_only:  # a face capture: each candidate against the better of its two front parts
         scores, ref = best_part_scores(P, candidates, ref)
     else:
@@ -260,6 +280,7 @@ def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
             candidates, scores, ref, face_only = neck, neck_scores, full_ref, False
     best = int(np.argmin(scores))
     up_d, front_d = candidates[best]
+    check = None if front_v is not None else _overlay_check(scores, candidates, best)
     if free:
         # candidates 30 degrees apart round the plane: settle the angle between them
         up_d, front_d = refine_angle(P, normal, up_d, front_d, ref[best] if isinstance(ref, list) else ref)
@@ -267,8 +288,38 @@ def _choose_up_front(P, normal, offset, candidates, cues, ref, up_v, front_v):
         # no human face matches (an animal, a cartoon): the reference head cannot tell its
         # front from its back, the neck cut can. Not a head open at both ends (a scan missing its
         # crown: the face overlays worse, but which end is the neck only the overlay tells)
-        up_d, front_d, _ = cut_up_front(P, normal, offset, cues)
-    return up_d, front_d
+        up_d, front_d, share = cut_up_front(P, normal, offset, cues)
+        check = {"told_by": "neck cut", "margin": round(float(share), 4), "close": bool(share < CLOSE_CUT)}
+    return up_d, front_d, check
+
+
+def close_front(frame):
+    """One line saying that ``frame``'s front was told from its back by a small margin
+    (:attr:`Frame.front_check`) and what to do should the head face the other way; None when it
+    was clear (or given)."""
+    check = frame.front_check
+    if not check or not check["close"]:
+        return None
+    if check["told_by"] == "neck cut":
+        how = (f"by its neck cut: {check['margin']:.0%} of the head's reach lies ahead of it; under "
+               f"{CLOSE_CUT:.0%} is close")
+    else:
+        how = (f"by the reference head: it overlays {check['margin']:.1%} better than facing the other way; "
+               f"under {CLOSE_OVERLAY:.0%} is close")
+    # no axis is offered: the other way is seldom one of the file's axes (spot's lies between -y and -z), and a
+    # forced front is taken exactly, so --front -y stood spot 65 degrees off where --up +y --front -z is right
+    return (f"front {frame.front} is a close call against its back ({how}): look at the rig (autobones view); "
+            "if the face looks backwards, give the file's axes: --up AXIS --front AXIS (up=, front= in Python)")
+
+
+def _overlay_check(scores, candidates, best):
+    """:attr:`Frame.front_check` of the reference's choice: the ``best`` of ``candidates`` ((up, front)
+    pairs) by overlay ``scores`` against the best candidate facing the other way; None if none does."""
+    away = [s for s, (_, f) in zip(scores, candidates) if f @ candidates[best][1] < 0]
+    if not away:
+        return None
+    margin = (min(away) - scores[best]) / max(scores[best], 1e-300)
+    return {"told_by": "reference head", "margin": round(float(margin), 4), "close": bool(margin < CLOSE_OVERLAY)}
 
 
 def _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err):

@@ -309,6 +309,9 @@ def test_outputs_are_named_as_place_and_transfer_name_theirs(tmp_path):
     assert rep["counts"]["ok"] == 1 and rep["files"][0]["output"] == "x/a.rig.glb"
     assert sorted(p.name for p in (out / "x").iterdir()) == ["a.rig.glb", "a.rig.json", "a.weights.npz"]
     assert not (out / "x" / "a.glb").exists()
+    # the robot's front is told from its back by 0.3 % of the reference's overlay: the report names the rig
+    warned = rep["files"][0]["warnings"]
+    assert [w["kind"] for w in warned] == ["front a close call"] and "--up AXIS --front AXIS" in warned[0]["text"]
 
 
 def test_a_folder_from_an_older_batch_is_rigged_again_once(tmp_path):

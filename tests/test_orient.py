@@ -459,3 +459,30 @@ def test_a_crack_left_by_split_triangles_is_no_cut():
     whole, cracked = detect_frame(V, F), detect_frame(np.vstack([V, *mids]), np.vstack([F[~pick], split]))
     for row in (1, 2):
         assert np.degrees(np.arccos(np.clip(whole.rotation[row] @ cracked.rotation[row], -1, 1))) < 10
+
+
+def test_a_front_told_from_the_back_by_a_small_margin_is_said(tmp_path, caplog):
+    """A front the reference head tells from the back by under 2 % (the robot: 0.3 %; its mirror image
+    was taken from behind at 0.1 %) or a neck cut with under 60 % of the head's reach ahead of it (the
+    cow: 58 %; spot, taken from behind, 58 %) is said in one warning and in the sidecar's frame, so
+    that rig gets a look; a human head's front (the default head: about 20 %) and a given front are not."""
+    import json
+    import logging
+
+    from autobones import samples
+
+    V, F = default_head()
+    clear = detect_frame(V, F).front_check
+    assert clear["told_by"] == "reference head" and clear["margin"] > 0.1 and not clear["close"]
+    assert detect_frame(V, F, front="+z").front_check is None
+    cow = detect_frame(*load_mesh(data("zoo/cowHead.obj"))).front_check
+    assert cow["told_by"] == "neck cut" and 0.5 <= cow["margin"] < 0.6 and cow["close"]
+    with caplog.at_level(logging.WARNING, logger="autobones"):
+        rig = autobones.place(samples.path("robot.obj"), density="sparse")
+    check = rig.frame.front_check
+    assert check["told_by"] == "reference head" and 0 <= check["margin"] < 0.02 and check["close"]
+    said = [r.getMessage() for r in caplog.records if "close call" in r.getMessage()]
+    assert len(said) == 1 and "robot.obj: front +z is a close call" in said[0] and "--up AXIS --front AXIS" in said[0]
+    rig.save(str(tmp_path / "robot.glb"))
+    assert json.loads((tmp_path / "robot.rig.json").read_text())["frame"]["front_check"] == check
+    assert autobones.load_rig(str(tmp_path / "robot.glb")).frame.front_check == check   # nothing lost on a resave

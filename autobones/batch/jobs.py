@@ -10,6 +10,7 @@ import time
 import traceback
 
 from ..errors import AutobonesError
+from ..orient import close_front
 from ..io.atomic import replace_all
 
 PARTIAL_SUFFIX = ".partial"
@@ -178,6 +179,9 @@ def rig_one(input_path, output_path, options, input_root=None):
                 raise AutobonesError(f"{target}: a folder of that name is in the way of the rig; move it")
         with _one_blas_thread():
             rig = _make_rig(input_path, options, record)
+        close = close_front(rig.frame)
+        if close:   # a front told from the back by a small margin: the rig to look at among hundreds
+            record.setdefault("warnings", []).append({"kind": "front a close call", "text": close})
         rig.batch = {"options": options, "options_hash": h}
         _save_atomically(rig, output_path, partial, options.get("expressions", False), options.get("tissue", False),
                          input_root)

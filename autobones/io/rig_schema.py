@@ -137,7 +137,8 @@ def check_finite_tree(x, key):
 
 def check_frame(d, key="frame"):
     """The sidecar's ``frame``: a 3x3 rotation (orthonormal, det +1), an origin, ``head_size`` > 0, and
-    optionally ``axes`` (the head's anatomical axes, a rotation too)."""
+    optionally ``axes`` (the head's anatomical axes, a rotation too) and ``front_check`` (how clearly
+    the front was told from the back)."""
     mapping(d, key)
     _rotation(d.get("rotation"), f"{key}.rotation")
     if d.get("axes") is not None:
@@ -146,6 +147,13 @@ def check_frame(d, key="frame"):
     number(d.get("head_size"), f"{key}.head_size", above=0.0)
     if d.get("symmetry_error") is not None:
         number(d["symmetry_error"], f"{key}.symmetry_error", low=0.0)
+    check = d.get("front_check")
+    if check is not None:
+        mapping(check, f"{key}.front_check")
+        if check.get("told_by") not in ("reference head", "neck cut") or not isinstance(check.get("close"), bool):
+            raise SchemaError(f"{key}.front_check: expected told_by 'reference head' or 'neck cut' and close true "
+                              "or false")
+        number(check.get("margin"), f"{key}.front_check.margin")
 
 
 def _rotation(R, key):

@@ -21,7 +21,7 @@ from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
 from ..geometry.topology import used_vertices
 from ..geometry.winding import outward_faces
-from ..orient import Frame, detect_frame
+from ..orient import Frame, close_front, detect_frame
 from ..rig import Rig
 from ..timing import Stopwatch
 from .segment import segment_head
@@ -93,6 +93,9 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     F_given, (F, wound) = F, wound_outward(V, F, source)   # rigged outward, written as given
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)
+    close = close_front(frame)
+    if close:
+        log.warning("%s: %s", source or "mesh", close)
     C = frame.to_canonical(V)
     lap("orient")
     # one welded copy, decimated for a dense scan, serves the inside tests, the closest surface points
