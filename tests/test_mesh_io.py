@@ -361,6 +361,24 @@ def test_place_rigs_a_head_with_a_stray_triangle(caplog):
     assert side["vertex_count"] == len(W)
 
 
+def test_the_head_rigged_without_its_stray_parts_keeps_its_file_name(tmp_path, caplog):
+    """The body rigged apart from a stray part (or a hat) goes through ``place`` again: every message
+    of that run names the file (the robot's front, a close call, was said of "mesh")."""
+    import logging
+
+    import autobones
+    from autobones.io.obj import write_obj
+
+    W, G = _with_triangles(*_robot(), _far_triangle(_robot()[0], 10.0))
+    path = tmp_path / "robot_and_a_stray.obj"
+    write_obj(str(path), W, G)
+    with caplog.at_level(logging.WARNING, logger="autobones"):
+        rig = autobones.place(str(path), density="sparse")
+    said = [r.getMessage() for r in caplog.records]
+    assert rig.source == path.name and len(said) == 2, said
+    assert all(m.startswith(path.name + ": ") for m in said) and "close call" in said[0] and "dropped" in said[1]
+
+
 @pytest.mark.parametrize("command", ["place", "transfer"])
 def test_a_head_wearing_a_hat_is_rigged_as_the_bare_head(command):
     """A lump set on the head (a ball of 0.15 head sizes on the goat's crown, a separate part) turned

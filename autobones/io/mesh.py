@@ -21,7 +21,7 @@ from ..geometry.normals import triangle_normals
 from ..geometry.topology import used_vertices
 from .files import check_regular
 from .obj import read_obj
-from .parts import parts_apart, stray_parts
+from .parts import NamedMesh, parts_apart, stray_parts
 
 log = logging.getLogger("autobones")
 
@@ -119,7 +119,8 @@ def resolve_mesh(mesh, strays=False):
     F : (m, 3) int64
         Triangles.
     source : str or None
-        The file's base name (the default head's for None); None for arrays and objects.
+        The file's base name (the default head's for None); None for arrays and objects (but a
+        :class:`~autobones.io.parts.NamedMesh`'s own).
 
     Raises
     ------
@@ -137,7 +138,9 @@ def resolve_mesh(mesh, strays=False):
         # the file name only: a sidecar must not change when the folder moves (batch, clusters)
         return (*load_mesh(mesh, strays=strays), os.path.basename(os.fspath(mesh)))
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
-        name = type(mesh).__name__
+        # a head rigged without its stray or worn parts keeps its file's name (io.parts.NamedMesh)
+        source = mesh.source if isinstance(mesh, NamedMesh) else None
+        name = source or type(mesh).__name__
         try:
             V, F = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
         except (TypeError, ValueError) as exc:
@@ -145,7 +148,7 @@ def resolve_mesh(mesh, strays=False):
         if not (np.issubdtype(F.dtype, np.integer) or (F.size == 0 and F.ndim == 2)):
             raise AutobonesError(f"{name}: faces must be integer vertex indices, got dtype {F.dtype}")
         V, F = check_mesh(V, F, name=name, strays=strays)
-        return V, F, None
+        return V, F, source
     raise AutobonesError(f"mesh: expected a file path, a (V, F) pair, an object with vertices and faces "
                          f"(trimesh.Trimesh) or None, got {type(mesh).__name__}")
 

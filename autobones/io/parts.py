@@ -34,6 +34,14 @@ SIDE_SHARE = 0.2
 SIDE_GAP = 0.1
 
 
+class NamedMesh:
+    """Arrays ``vertices`` (n, 3) and ``faces`` (m, 3) with the ``source`` file name (str or None) their
+    messages name (:func:`autobones.io.mesh.resolve_mesh` takes it as a mesh object)."""
+
+    def __init__(self, vertices, faces, source=None):
+        self.vertices, self.faces, self.source = vertices, faces, source
+
+
 class LeftOut:
     """Parts of a mesh left out of rigging (:func:`stray_parts`, :func:`worn_parts`) and the body
     rigged without them.
@@ -58,6 +66,11 @@ class LeftOut:
         self.V, self.F = V[self.index], remap[F[~stray_face]]
         self.record = {"parts": int(parts), "vertices": int(len(V) - len(self.index)),
                        "faces": int(stray_face.sum()), "area_fraction": round(float(area_fraction), 6)}
+
+    def body(self, source=None):
+        """The body as a mesh argument that keeps the file's name ``source`` (str or None) for the
+        messages of the rigging it goes through (``place`` and ``transfer`` take it as a mesh)."""
+        return NamedMesh(self.V, self.F, source)
 
     def restore(self, rig, source=None):
         """``rig`` (rigged on the body) back on every input vertex, in input order: the left-out
