@@ -463,8 +463,10 @@ def cmd_animate(args):
     with progress(args, "writing the animation"):
         written = save_animated_rig(args.rig, capture, args.output, bones=not args.no_bones)
     watch.lap("animation")
-    print(f"{args.output}: {len(capture.times)} frames, {capture.times[-1]:.2f} s, {len(capture.weights)} ARKit "
-          f"shapes" + ("" if args.no_bones or not capture.angles else ", head and eye turns")
+    from autobones.errors import counted
+
+    print(f"{args.output}: {counted(len(capture.times), 'frame')}, {capture.times[-1]:.2f} s, "
+          f"{len(capture.weights)} ARKit shapes" + ("" if args.no_bones or not capture.angles else ", head and eye turns")
           + f", {time.perf_counter() - t:.1f} s; sidecars {os.path.basename(written[1])}, "
           f"{os.path.basename(written[2])}")
     return 0
