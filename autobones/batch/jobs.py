@@ -10,8 +10,8 @@ import time
 import traceback
 
 from ..errors import AutobonesError
-from ..orient import close_front
 from ..io.atomic import replace_all
+from ..orient import close_front
 
 PARTIAL_SUFFIX = ".partial"
 
