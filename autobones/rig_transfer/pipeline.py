@@ -40,21 +40,17 @@ from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
 from .neck import ANGLE, still_neck_base
 from .fields import transfer_fields
+from .head_landmarks import head_landmarks
 from .symmetry import MAX_LANDMARK_MISMATCH, Symmetry
 from .under_skin import carry_muscles, ride, under_skin_warp
-from ..errors import AutobonesError, counted
 from ..io.jsonable import jsonable
-from ..io.landmarks import NAMES, resolve_landmarks, validate_landmarks
 from ..io.mesh import resolve_mesh, wound_outward
 from ..io.parts import stray_parts, worn_parts
-from ..orient import detect_frame, frame_from_landmarks
 from ..geometry.weights import prune_weights
 from ..rig import Rig
 from ..timing import Stopwatch
 
 log = logging.getLogger("autobones")
-
-MIN_LANDMARKS = 10
 
 
 def load_generic(rig=None):
@@ -245,7 +241,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     F_given, (F, wound) = F, wound_outward(V, F, source)   # fitted outward, written as given
     generic = load_generic(rig)
     lap("load")
-    lm, frame, detected, shared = _head_landmarks(V, F, source, landmarks, generic, up, front)
+    lm, frame, detected, shared = head_landmarks(V, F, source, landmarks, generic, up, front)
     lap("landmarks")
     src, dst = _landmark_pairs(generic, rig, lm, shared, detected, lap)
     # a smooth symmetric head gives its points nothing to stop them sliding across the midline: there the
@@ -452,37 +448,6 @@ def _expression_record(found, fit_details, asked, space, detected):
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
             **({"note": found["note"]} if "note" in found else {}), "solved_on": "the ARKit shape set's skin",
             "generic": fit_details.get("expression", {}).get("weights", {})}
-
-
-def _head_landmarks(V, F, source, landmarks, generic, up, front):
-    """The head's landmarks and frame: read and validated, or detected when ``landmarks`` is None.
-
-    Returns ``lm`` (dict str -> (3,) float64, input frame), ``frame`` (orient.Frame),
-    ``detected`` (the detector's result, or None for given landmarks) and ``shared`` (the
-    contract names in both ``lm`` and the generic rig, contract order).
-    """
-    detected = None
-    if landmarks is None:
-        from ..landmarks.detect import LandmarkDetector
-
-        frame = detect_frame(V, F, up=up, front=front)
-        detected = LandmarkDetector().detect(V, F, frame=frame, what=source or "the head")
-        lm, where = dict(detected), "automatic landmarks"
-        log.info("landmarks: %d found automatically (mean confidence %.2f)%s", len(lm),
-                 np.mean(list(detected.confidence.values())),
-                 f"; dropped {', '.join(detected.dropped)}" if detected.dropped else "")
-    else:
-        lm, where = resolve_landmarks(landmarks)
-        # the landmarks give the frame directly (and much faster) unless the user overrides an axis
-        frame = None if up or front else frame_from_landmarks(V, F, lm)
-        frame = frame or detect_frame(V, F, up=up, front=front)
-    lm = validate_landmarks(lm, V, F, frame=frame, min_count=MIN_LANDMARKS, source=where)
-    shared = [n for n in NAMES if n in lm and n in generic.landmarks]
-    if len(shared) < MIN_LANDMARKS:
-        raise AutobonesError(
-            f"{where}: only {counted(len(shared), 'landmark name')} {'is' if len(shared) == 1 else 'are'} shared with the generic rig "
-            f"({', '.join(shared) or 'none'}); at least {MIN_LANDMARKS} well-spread ones are needed")
-    return lm, frame, detected, shared
 
 
 def _carry_attributes(generic, P, ok, V, F, skeleton, under):

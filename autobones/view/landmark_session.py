@@ -27,7 +27,7 @@ from ..io.atomic import check_destination, refuse_overwriting_inputs
 from ..io.landmark_checks import landmark_problems, landmark_values
 from ..io.landmark_names import GROUPS, NAMES, mirror_name, where
 from ..orient import detect_frame, frame_from_landmarks
-from ..rig_transfer.pipeline import MIN_LANDMARKS  # the fewest landmarks transfer takes: the page's "too few"
+from ..rig_transfer.head_landmarks import MIN_LANDMARKS  # the fewest landmarks transfer takes: the page's "too few"
 
 #: The names the assisted proposal needs placed first (``assist_landmarks``'s ``given``).
 ASSIST_NEEDS = ("exocanthion_l", "exocanthion_r", "pronasale", "cheilion_l", "cheilion_r")
