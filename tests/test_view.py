@@ -269,7 +269,10 @@ def test_batch_listing_shows_the_sidecars_warnings(batch_dir, tmp_path):
     side.write_text(json.dumps(meta))
     (folder / "sub" / "goat.rig.json").unlink()
     files = {f["output"]: f for f in batch_listing(open_site(folder))["files"]}
-    assert [w["kind"] for w in files["robot.rig.glb"]["warnings"]] == ["landmarks dropped", "ARKit triangles turned over"]
+    # the robot's front is a close call (0.3 % of the reference's overlay): the sidecar's, said once though
+    # the batch record says it too
+    assert [w["kind"] for w in files["robot.rig.glb"]["warnings"]] == ["landmarks dropped", "ARKit triangles turned over",
+                                                                       "front a close call"]
     assert "menton" in files["robot.rig.glb"]["warnings"][0]["text"]
     assert "eyeBlink_L (3)" in files["robot.rig.glb"]["warnings"][1]["text"] and "jawOpen" not in files["robot.rig.glb"]["warnings"][1]["text"]
     assert [w["kind"] for w in files["sub/goat.rig.glb"]["warnings"]] == ["rig files missing"]
@@ -592,7 +595,7 @@ def test_browser_batch_page_filters_and_opens_a_rig(batch_dir, browser, tmp_path
         hook = "window.autobonesViewer"
         assert sorted(page.evaluate(f"{hook}.visible()")) == ["bad.rig.glb", "robot.rig.glb", "sub/goat.rig.glb"]
         assert "no faces" in page.locator('.card[data-output="bad.rig.glb"] .err').inner_text()
-        assert "menton" in page.locator('.card[data-output="robot.rig.glb"] .warn').inner_text()
+        assert "menton" in page.locator('.card[data-output="robot.rig.glb"] .warn').first.inner_text()
         page.wait_for_function(f"{hook}.thumbnailsLoaded() === 2", timeout=60000)
         _not_blank(page.screenshot(), min_drawn=0.05)
         page.uncheck('input[data-status="ok"]')

@@ -23,7 +23,7 @@ from ..errors import AutobonesError
 from ..geometry.ring import RING_KINDS
 from ..io.files import read_json, shown as shown_name
 from ..io.rig_files import load_rig
-from ..orient import Frame
+from ..orient import Frame, close_front
 from ..rig import SIDECAR_FORMAT, sidecar_paths
 
 
@@ -167,7 +167,8 @@ def rig_warnings(meta, record=None):
     Only what the rig files or the batch record say, no thresholds of our own: landmarks dropped
     or flagged by the automatic detector, morph targets not written, ARKit shapes whose triangles
     turn over (the sidecar's ``arkit.flipped_triangles``, which ``transfer`` also logs as a warning),
-    and a ``warnings`` list in the batch record when a newer batch writes one.
+    a front told from the back by a small margin (the sidecar's ``frame.front_check``, which ``place``
+    logs), and a ``warnings`` list in the batch record when a newer batch writes one (each kind once).
     """
     out = []
     meta = meta or {}
@@ -186,12 +187,28 @@ def rig_warnings(meta, record=None):
         bad = ", ".join(f"{k} ({v})" for k, v in flipped.items() if v)
         out.append({"kind": "ARKit triangles turned over",
                     "text": f"ARKit shapes with triangles turned over at weight 1: {bad}"})
+    close = _close_front(meta.get("frame"))
+    if close:
+        out.append({"kind": "front a close call", "text": close})
     for w in (record or {}).get("warnings") or []:
         if isinstance(w, dict):
+            if w.get("kind") == "front a close call" and close:
+                continue   # the batch record repeats what the sidecar keeps
             out.append({"kind": str(w.get("kind", "warning")), "text": str(w.get("text", w))})
         else:
             out.append({"kind": str(w).split(":")[0][:40], "text": str(w)})
     return out
+
+
+def _close_front(frame):
+    """:func:`autobones.orient.close_front` of a sidecar's ``frame`` dict, or None (a clear front, none
+    recorded, or a frame that does not read)."""
+    if not isinstance(frame, dict) or not (frame.get("front_check") or {}).get("close"):
+        return None
+    try:
+        return close_front(Frame.from_dict(frame))
+    except (KeyError, TypeError, ValueError):
+        return None
 
 
 def rig_facts(root, rel, record=None):
@@ -301,7 +318,9 @@ def batch_listing(site):
         inside = glb is not None and glb.startswith(site.root + os.sep)
         brief = _sidecar_brief(site, glb) if inside and entry["status"] != "failed" else None
         entry["viewable"] = brief is not None
-        entry["warnings"] = (list(brief["warnings"]) if brief else []) + rig_warnings(None, rec)
+        said = list(brief["warnings"]) if brief else []
+        # the record's own (a close call on the front is in the sidecar too: said once)
+        entry["warnings"] = said + [w for w in rig_warnings(None, rec) if w["kind"] not in {v["kind"] for v in said}]
         if entry["status"] != "failed" and brief is None:
             entry["warnings"].append({"kind": "rig files missing",
                                       "text": "the glb or its sidecar is missing or unreadable"})
