@@ -181,13 +181,13 @@ def test_automatic_landmarks_leave_the_fit_neutral(monkeypatch):
 
     V, F = load_mesh(data("menpo3d/james.obj"))[:2]
     lm = json.loads(open(data("menpo3d/james.landmarks.json")).read())["landmarks"]
-    real = pipeline._head_landmarks
+    real = pipeline.head_landmarks
 
     def as_detected(*args):
         got, frame, _, shared = real(*args)
         return got, frame, type("Detected", (), {"confidence": {}, "dropped": [], "flagged": []})(), shared
 
-    monkeypatch.setattr(pipeline, "_head_landmarks", as_detected)
+    monkeypatch.setattr(pipeline, "head_landmarks", as_detected)
     monkeypatch.setattr(pipeline, "generic_detected_landmarks", lambda generic, rig=None: None)
     rig = autobones.transfer((V, F), lm)
     assert "automatic landmarks" in rig.options["expression_fit"]["off"]
