@@ -40,6 +40,15 @@ def outputs(folder):
             if p.is_file() and p.name != REPORT_NAME}
 
 
+def _rigs_written(folder):
+    """Whether a sidecar is in ``folder`` yet, looked at while the batch writes: a ``.partial`` folder it
+    renames or removes during the walk is a "not yet" (the walk raised FileNotFoundError, a flake)."""
+    try:
+        return bool(list(Path(folder).rglob("*.rig.json")))
+    except FileNotFoundError:
+        return False
+
+
 def make_heads(root, names=HEADS):
     for rel in names:
         dst = Path(root) / "sub" / Path(rel).name
@@ -196,7 +205,7 @@ def test_kill_9_of_the_batch_leaves_no_process_and_a_rerun_is_byte_identical(tmp
     try:
         # the workers are busy once a first rig is complete: the other worker is inside one
         deadline = time.monotonic() + 300
-        while not list(out.rglob("*.rig.json")) and proc.poll() is None and time.monotonic() < deadline:
+        while not _rigs_written(out) and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.02)
         known = descendants(proc.pid)
         os.kill(proc.pid, signal.SIGKILL)  # the batch process only, as `kill -9 PID` does
