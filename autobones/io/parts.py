@@ -69,7 +69,7 @@ class LeftOut:
         self.record = {"parts": int(parts), "vertices": int(len(V) - len(self.index)),
                        "faces": int(stray_face.sum()), "area_fraction": round(float(area_fraction), 6)}
 
-    def body(self, source=None):
+    def as_mesh(self, source=None):
         """The body as a mesh argument that keeps the file's name ``source`` (str or None) for the
         messages of the rigging it goes through (``place`` and ``transfer`` take it as a mesh)."""
         return NamedMesh(self.V, self.F, source)

@@ -89,7 +89,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     # the skin under them): rigged without them (io.parts)
     body = stray_parts(V, F) or worn_parts(V, F)
     if body is not None:
-        return body.restore(place(body.body(source), density, up, front, random_state), source)
+        return body.restore(place(body.as_mesh(source), density, up, front, random_state), source)
     F_given, (F, wound) = F, wound_outward(V, F, source)   # rigged outward, written as given
     lap("load")
     frame = detect_frame(V, F, up=up, front=front)

@@ -24,6 +24,10 @@ MIN_LANDMARKS = 10   # contract names shared with the generic rig that a transfe
 def head_landmarks(V, F, source, landmarks, generic, up, front):
     """The head's landmarks and frame: read and validated, or detected when ``landmarks`` is None.
 
+    ``V`` (n, 3) float and ``F`` (m, 3) int the head (its own frame and units), ``source`` its file
+    name for messages (or None), ``landmarks`` what :func:`autobones.io.landmarks.resolve_landmarks`
+    takes (or None), ``generic`` the LabelledRig, ``up`` / ``front`` forced axes (or None).
+
     Returns ``lm`` (dict str -> (3,) float64, input frame), ``frame`` (orient.Frame),
     ``detected`` (the detector's result, or None for given landmarks) and ``shared`` (the
     contract names in both ``lm`` and the generic rig, contract order).

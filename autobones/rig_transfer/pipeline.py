@@ -236,7 +236,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     V, F, source = resolve_mesh(head, strays=True)
     body = stray_parts(V, F) or worn_parts(V, F)
     if body is not None:   # parts far off or set on the head: rigged without them (io.parts)
-        return body.restore(transfer(body.body(source), landmarks, rig, up, front, control_points, details, arkit,
+        return body.restore(transfer(body.as_mesh(source), landmarks, rig, up, front, control_points, details, arkit,
                                      symmetric, expression_fit, aim_head, **fit_options), source)
     F_given, (F, wound) = F, wound_outward(V, F, source)   # fitted outward, written as given
     generic = load_generic(rig)
