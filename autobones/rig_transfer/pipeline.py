@@ -38,6 +38,7 @@ from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
+from .mouth_parts import mouth_part_rows
 from .neck import ANGLE, still_neck_base
 from .fields import transfer_fields
 from .head_landmarks import head_landmarks
@@ -348,6 +349,8 @@ def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted=None):
     # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
     jaw_details = {}
     W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
+    # teeth, gums, a mouth bag: separate parts no lip seed reaches, moved whole as the model poses them
+    W = mouth_part_rows(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
     if jaw_details.get("note"):
         log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
     lap("jaw")
