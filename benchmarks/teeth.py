@@ -1,0 +1,105 @@
+"""Benchmark the transferred rig's separate teeth: does each ride the jaw or the skull whole, and the
+right one (``autobones.rig_transfer.mouth_parts``)?
+
+    python benchmarks/teeth.py [--variants as-is,rot1,x1000,mirror,remesh,dec5k,jitter] [--heads ...]
+
+Heads: ICT's generic neutral and identities 000-002 (``../shared/data/ict``, 32 separate teeth, a
+mouth bag, eyeballs, lashes), with their landmark files, in the zoo's copies (``zoo_checks.make_variant``:
+turned, scaled, mirrored, remeshed, decimated to 5k vertices, landmarks jittered by 1 % of ex-ex).
+Truth: ICT's own ``jawOpen`` (``jawOpen.obj`` less the generic neutral, per vertex; ICT's model is
+linear, so the same offsets are each identity's): a separate part inside the mouth whose vertices
+move by more than a tenth of the largest motion rides the jaw (1), else the skull (0). A copy's
+vertices take the truth of the original's nearest vertex (mapped back). Reported, before (the
+repair's field alone, ``mouth_part_rows`` switched off) and after, over the small separate parts
+within reach of the stomion (``expressions.definitions.MODEL_DEFAULTS['mouth_parts']``):
+
+- ``parts``: how many; ``whole``: the share whose jaw weight is one value (spread <= 1e-9);
+- ``right``: the share whose mean jaw weight lies within 0.1 of the truth;
+- ``|w - truth|``: the mean over their vertices.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from unittest import mock
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+import autobones
+from autobones.geometry.topology import mesh_parts
+from autobones.io.landmarks import read_landmarks
+from autobones.io.mesh import load_mesh
+from autobones.rig_transfer import pipeline
+from autobones.rig_transfer.mouth_parts import mouth_part_rows
+
+ROOT = Path(__file__).resolve().parents[1]
+ICT = ROOT.parent / "shared" / "data" / "ict"
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import zoo_checks  # noqa: E402
+
+HEADS = ("generic_neutral_mesh", "identity000", "identity001", "identity002")
+VARIANTS = "as-is,rot1,x1000,mirror,remesh,dec5k,jitter"
+
+
+def truth_motion():
+    """(n,) float: ICT's jawOpen offset per vertex (mesh units, cm)."""
+    return np.linalg.norm(load_mesh(ICT / "jawOpen.obj")[0] - load_mesh(ICT / "generic_neutral_mesh.obj")[0], axis=1)
+
+
+def score(rig, var, V0, motion, before):
+    """(parts, whole, right, mean |w - truth|) for rig weights after / before (``before`` (n,) jaw)."""
+    V, F, lm = var.V, var.F, var.lm
+    sk = rig.skeleton
+    rows = mouth_part_rows(V, F, rig.weights, sk.names, sk.heads, rig.frame, lm)[1]
+    part = mesh_parts(len(V), F)
+    near = cKDTree(V0).query(var.back(V))[1]
+    moves = motion[near] > 0.1 * motion.max()
+    out = {}
+    for tag, jaw in (("before", before), ("after", rig.weights[:, sk.names.index("jaw")])):
+        whole, right, err = [], [], []
+        for p in np.unique(part[rows]):
+            r = part == p
+            t = float(moves[r].mean() > 0.5)
+            whole.append(np.ptp(jaw[r]) <= 1e-9)
+            right.append(abs(jaw[r].mean() - t) <= 0.1)
+            err.append(np.abs(jaw[r] - t))
+        n = len(whole)
+        out[tag] = (n, np.mean(whole) if n else np.nan, np.mean(right) if n else np.nan,
+                    float(np.concatenate(err).mean()) if n else np.nan)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--variants", default=VARIANTS)
+    ap.add_argument("--heads", default=",".join(HEADS))
+    args = ap.parse_args(argv)
+    motion = truth_motion()
+    print("| head | variant | vertices | parts | whole before -> after | right before -> after "
+          "| mean abs(w - truth) before -> after | s |")
+    print("|---|---|---:|---:|---|---|---|---:|")
+    t0 = time.perf_counter()
+    for name in args.heads.split(","):
+        V0, F0 = load_mesh(ICT / f"{name}.obj")[:2]
+        lm0 = {k: np.asarray(v, dtype=np.float64) for k, v in read_landmarks(ICT / f"{name}.landmarks.json").items()}
+        for vname in args.variants.split(","):
+            var = zoo_checks.make_variant(vname, V0, F0, lm0, seed=0)
+            if var is None:
+                continue
+            with mock.patch.object(pipeline, "mouth_part_rows", lambda V, F, W, *a, **k: (np.array(W), None)):
+                rig0 = autobones.transfer((var.V, var.F), var.lm)
+            t = time.perf_counter()
+            rig = autobones.transfer((var.V, var.F), var.lm)
+            s = time.perf_counter() - t
+            got = score(rig, var, V0, motion, rig0.weights[:, rig0.skeleton.names.index("jaw")])
+            (n, w0, r0, e0), (_, w1, r1, e1) = got["before"], got["after"]
+            print(f"| {name} | {vname} | {len(var.V):,} | {n} | {w0:.0%} -> {w1:.0%} | {r0:.0%} -> {r1:.0%} "
+                  f"| {e0:.3f} -> {e1:.3f} | {s:.1f} |", flush=True)
+    print(f"\n{time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
