@@ -10,12 +10,15 @@ Truth: ICT's own ``jawOpen`` (``jawOpen.obj`` less the generic neutral, per vert
 linear, so the same offsets are each identity's): a separate part inside the mouth whose vertices
 move by more than a tenth of the largest motion rides the jaw (1), else the skull (0). A copy's
 vertices take the truth of the original's nearest vertex (mapped back). Reported, before (the
-repair's field alone, ``mouth_part_rows`` switched off) and after, over the small separate parts
+repair's field alone, ``carried_mouth_parts`` and ``rigid_mouth_parts`` switched off) and after, over the small separate parts
 within reach of the stomion (``expressions.definitions.MODEL_DEFAULTS['mouth_parts']``):
 
 - ``parts``: how many; ``whole``: the share whose jaw weight is one value (spread <= 1e-9);
 - ``right``: the share whose mean jaw weight lies within 0.1 of the truth;
-- ``|w - truth|``: the mean over their vertices.
+- ``|w - truth|``: the mean over their vertices;
+- ``bag``: the large separate parts inside the mouth (ICT's mouth bag), skinned by the rig's weights with the
+  jaw turned about the rig's jaw joint to fit jawOpen on the lower teeth: the mean distance from jawOpen, %
+  of its largest motion; ``largest jaw step``: over every edge off the lip line (the zoo's check 2: <= 0.3).
 """
 from __future__ import annotations
 
@@ -33,7 +36,8 @@ from autobones.geometry.topology import mesh_parts
 from autobones.io.landmarks import read_landmarks
 from autobones.io.mesh import load_mesh
 from autobones.rig_transfer import pipeline
-from autobones.rig_transfer.mouth_parts import mouth_part_rows
+from autobones.rig_transfer.jaw import lip_line_edges
+from autobones.rig_transfer.mouth_parts import carried_mouth_parts, rigid_mouth_parts
 
 ROOT = Path(__file__).resolve().parents[1]
 ICT = ROOT.parent / "shared" / "data" / "ict"
@@ -44,16 +48,39 @@ HEADS = ("generic_neutral_mesh", "identity000", "identity001", "identity002")
 VARIANTS = "as-is,rot1,x1000,mirror,remesh,dec5k,jitter"
 
 
-def truth_motion():
-    """(n,) float: ICT's jawOpen offset per vertex (mesh units, cm)."""
-    return np.linalg.norm(load_mesh(ICT / "jawOpen.obj")[0] - load_mesh(ICT / "generic_neutral_mesh.obj")[0], axis=1)
+def truth_offsets():
+    """(n, 3) float: ICT's jawOpen offset per vertex (mesh units, cm)."""
+    return load_mesh(ICT / "jawOpen.obj")[0] - load_mesh(ICT / "generic_neutral_mesh.obj")[0]
+
+
+def bag_error(rig, var, V0, D0, jaw):
+    """(mean skinned-motion error on the large inner parts, % of the largest jawOpen motion; largest jaw
+    step off the lip line): the jaw turned about the rig's jaw joint to fit jawOpen on the teeth it moves."""
+    V, F, lm = var.V, var.F, var.lm
+    sk = rig.skeleton
+    near = cKDTree(V0).query(var.back(V))[1]
+    D = var.s * D0[near] @ var.R.T
+    size = np.linalg.norm(D, axis=1)
+    teeth = rigid_mouth_parts(V, F, rig.weights, sk.names, sk.heads, rig.frame, lm)[1]
+    inner = carried_mouth_parts(V, F, rig.weights, sk.names, sk.heads, rig.frame, lm)[1]
+    large = np.setdiff1d(inner, teeth)
+    c = sk.heads[sk.names.index("jaw")]
+    lower = teeth[size[teeth] > 0.1 * size.max()]
+    P, Q = V[lower] - c, V[lower] + D[lower] - c
+    U, _, Vt = np.linalg.svd(P.T @ Q)
+    R = Vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))]) @ U.T
+    t = (Q - P @ R.T).mean(axis=0)
+    u = (V - c) @ R.T + t + c - V
+    err = np.linalg.norm(jaw[:, None] * u - D, axis=1)[large]
+    E, on_line = lip_line_edges(V, F, lm)
+    return 100.0 * float(err.mean()) / size.max(), float(np.abs(jaw[E[:, 0]] - jaw[E[:, 1]])[~on_line].max())
 
 
 def score(rig, var, V0, motion, before):
     """(parts, whole, right, mean |w - truth|) for rig weights after / before (``before`` (n,) jaw)."""
     V, F, lm = var.V, var.F, var.lm
     sk = rig.skeleton
-    rows = mouth_part_rows(V, F, rig.weights, sk.names, sk.heads, rig.frame, lm)[1]
+    rows = rigid_mouth_parts(V, F, rig.weights, sk.names, sk.heads, rig.frame, lm)[1]
     part = mesh_parts(len(V), F)
     near = cKDTree(V0).query(var.back(V))[1]
     moves = motion[near] > 0.1 * motion.max()
@@ -77,10 +104,11 @@ def main(argv=None):
     ap.add_argument("--variants", default=VARIANTS)
     ap.add_argument("--heads", default=",".join(HEADS))
     args = ap.parse_args(argv)
-    motion = truth_motion()
-    print("| head | variant | vertices | parts | whole before -> after | right before -> after "
-          "| mean abs(w - truth) before -> after | s |")
-    print("|---|---|---:|---:|---|---|---|---:|")
+    D0 = truth_offsets()
+    motion = np.linalg.norm(D0, axis=1)
+    print("| head | variant | vertices | teeth | whole before -> after | right before -> after "
+          "| mean abs(w - truth) before -> after | bag motion error % before -> after | largest jaw step | s |")
+    print("|---|---|---:|---:|---|---|---|---|---|---:|")
     t0 = time.perf_counter()
     for name in args.heads.split(","):
         V0, F0 = load_mesh(ICT / f"{name}.obj")[:2]
@@ -89,15 +117,19 @@ def main(argv=None):
             var = zoo_checks.make_variant(vname, V0, F0, lm0, seed=0)
             if var is None:
                 continue
-            with mock.patch.object(pipeline, "mouth_part_rows", lambda V, F, W, *a, **k: (np.array(W), None)):
+            off = lambda V, F, W, *a, **k: (np.array(W), None)  # noqa: E731
+            with mock.patch.object(pipeline, "rigid_mouth_parts", off), \
+                    mock.patch.object(pipeline, "carried_mouth_parts", off):
                 rig0 = autobones.transfer((var.V, var.F), var.lm)
             t = time.perf_counter()
             rig = autobones.transfer((var.V, var.F), var.lm)
             s = time.perf_counter() - t
             got = score(rig, var, V0, motion, rig0.weights[:, rig0.skeleton.names.index("jaw")])
             (n, w0, r0, e0), (_, w1, r1, e1) = got["before"], got["after"]
+            (b0, j0), (b1, j1) = (bag_error(r, var, V0, D0, r.weights[:, r.skeleton.names.index("jaw")])
+                                  for r in (rig0, rig))
             print(f"| {name} | {vname} | {len(var.V):,} | {n} | {w0:.0%} -> {w1:.0%} | {r0:.0%} -> {r1:.0%} "
-                  f"| {e0:.3f} -> {e1:.3f} | {s:.1f} |", flush=True)
+                  f"| {e0:.3f} -> {e1:.3f} | {b0:.1f} -> {b1:.1f} | {j0:.2f} -> {j1:.2f} | {s:.1f} |", flush=True)
     print(f"\n{time.perf_counter() - t0:.0f} s")
 
 

@@ -10,7 +10,7 @@ Different Face Models"), one module a stage:
   the muscle origins; muscle insertions ride the correspondence;
 - ``fields``: per-vertex attributes copied through the correspondence, inpainted where it is unreliable;
 - ``eyes``: modelled eyeballs bound rigidly to the eye bones, the eye bones centred in them;
-- ``mouth_parts``: separate teeth (small parts inside the mouth) riding the jaw or the skull whole;
+- ``mouth_parts``: the mouth's separate parts (teeth, a mouth bag) on the jaw or the skull, teeth whole;
 - ``pipeline``: :func:`transfer`, which runs them and returns a :class:`autobones.rig.Rig`.
 
 The generic rig's type is :class:`autobones.labelled_rig.LabelledRig`; :mod:`autobones.rig_building`

@@ -38,7 +38,7 @@ from .expression_prior import shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
-from .mouth_parts import mouth_part_rows
+from .mouth_parts import carried_mouth_parts, rigid_mouth_parts
 from .neck import ANGLE, still_neck_base
 from .fields import transfer_fields
 from .head_landmarks import head_landmarks
@@ -348,9 +348,11 @@ def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted=None):
     lap("neck")
     # the jaw weight as the head's landmarks say: on the chin and lower lip, smooth off the lip line
     jaw_details = {}
+    # teeth, gums, a mouth bag: separate parts no landmark speaks for, carried as the model poses them,
+    # smoothed by the repair, the teeth then moved whole (mouth_parts)
+    W = carried_mouth_parts(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
     W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
-    # teeth, gums, a mouth bag: separate parts no lip seed reaches, moved whole as the model poses them
-    W = mouth_part_rows(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
+    W = rigid_mouth_parts(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
     if jaw_details.get("note"):
         log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
     lap("jaw")
