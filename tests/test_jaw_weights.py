@@ -397,3 +397,29 @@ def test_teeth_ride_the_jaw_or_the_skull_whole(rigs):
     jittered = {k: np.asarray(p) + 0.01 * ex * rng.standard_normal(3) / np.sqrt(3) for k, p in lm.items()}
     again = _jaw(autobones.transfer((V, F), jittered))
     np.testing.assert_array_equal(again[teeth], jaw[teeth])
+
+
+def test_teeth_added_to_a_scan_ride_whole():
+    """A stand-in off ICT's topology: two small boxes set inside james's closed mouth (a game head's
+    separate upper and lower teeth), 0.3 ex-ex behind the stomion and 0.08 above and below its level: the upper
+    rides the skull, the lower the jaw, each whole."""
+    import trimesh
+
+    from autobones.orient import frame_from_landmarks
+
+    V, F, lm = _head("james")
+    fu = face_unit(V, lm)
+    frame = frame_from_landmarks(V, F, lm)   # the frame transfer reads the head in: the stomion's level is its
+    parts = [(V, F)]
+    for side in (1.0, -1.0):
+        box = trimesh.creation.box(extents=(0.1 * fu,) * 3)
+        up, front = frame.rotation[1], frame.rotation[2]   # canonical +Y, +Z in the head's frame
+        parts.append((box.vertices + lm["stomion"] - 0.3 * fu * front + side * 0.08 * fu * up, box.faces))
+    Vt = np.vstack([p[0] for p in parts])
+    Ft = np.vstack([parts[0][1], parts[1][1] + len(V), parts[2][1] + len(V) + 8])
+    rig = autobones.transfer((Vt, Ft), lm)
+    jaw = _jaw(rig)
+    np.testing.assert_array_equal(jaw[len(V):len(V) + 8], 0.0)
+    np.testing.assert_array_equal(jaw[len(V) + 8:], 1.0)
+    np.testing.assert_allclose(rig.weights.sum(axis=1), 1.0, atol=1e-12)
+    assert len(rigid_mouth_parts(Vt, Ft, rig.weights, rig.skeleton.names, rig.skeleton.heads, rig.frame, lm)[1]) == 16
