@@ -19,6 +19,7 @@ from ..io.mesh import resolve_mesh, wound_outward
 from ..io.parts import stray_parts, worn_parts
 from ..geometry.proxy import mesh_proxy
 from ..geometry.head_share import face_only
+from ..geometry.rigid_parts import closed_small_parts, rigid_weights
 from ..geometry.topology import used_vertices
 from ..geometry.winding import outward_faces
 from ..orient import Frame, close_front, detect_frame
@@ -165,7 +166,8 @@ def _depth_skeleton(seg, heads, tails, n_bones):
 def _local_weights(C, F, skel_c, proxy, seg, frame):
     """Bone-heat skin weights (n, b) float of the canonical head ``C`` (n, 3) float, head sizes,
     with triangles ``F`` (m, 3) int, for ``skel_c``'s b bones (canonical), restricted to their
-    regions by :func:`restrict_weights` (with ``seg``'s masks and joints and ``frame``'s cut)."""
+    regions by :func:`restrict_weights` (with ``seg``'s masks and joints and ``frame``'s cut), each small
+    closed part's rows made one (:mod:`autobones.geometry.rigid_parts`)."""
     W = bone_heat_weights(C, F, skel_c.segments, proxy=proxy, prune=0)  # pruned once, after the restriction
     # keep them local, on the full mesh (after a proxy's carry-up): facial bones on the face and its
     # blend band, the neck base pure neck, no neck weight on the skull
@@ -175,7 +177,8 @@ def _local_weights(C, F, skel_c, proxy, seg, frame):
                      cut=frame.cut, no_neck="no_neck" in joints.cues["neck"],
                      chin_base=joints.menton_source == "chin",
                      jaw_angle=jaw_angle(seg.head_bone[0], joints.menton, joints.chin_front))
-    return W
+    # eyeballs, teeth: a small closed part moves whole (the heat gave an eyeball's front and back different bones)
+    return rigid_weights(W, C, F, closed_small_parts(C, F))
 
 
 def jaw_angle(joint, menton, chin_front):
@@ -261,6 +264,7 @@ def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random
         mass = base.weights[:, parent]
         W[:, parent] = mass * H[:, 0]
         W[:, kids] = mass[:, None] * H[:, 1:]
+    W = rigid_weights(W, C, F, closed_small_parts(C, F))   # teeth split by the facial bones' heat: whole again
     base.timings["facial+weights"] = time.perf_counter() - t
     # the facial bones' heat ran against the generic's head bone as carried; exported, it twists about
     # the head's up, as a transferred rig's does
