@@ -2,6 +2,7 @@
 right one (``autobones.rig_transfer.mouth_parts``)?
 
     python benchmarks/teeth.py [--variants as-is,rot1,x1000,mirror,remesh,dec5k,jitter] [--heads ...]
+    python benchmarks/teeth.py --place [--variants ...]    # place's eyeballs and teeth, one row each?
 
 Heads: ICT's generic neutral and identities 000-002 (``../shared/data/ict``, 32 separate teeth, a
 mouth bag, eyeballs, lashes), with their landmark files, in the zoo's copies (``zoo_checks.make_variant``:
@@ -19,6 +20,10 @@ within reach of the stomion (``expressions.definitions.MODEL_DEFAULTS['mouth_par
 - ``bag``: the large separate parts inside the mouth (ICT's mouth bag), skinned by the rig's weights with the
   jaw turned about the rig's jaw joint to fit jawOpen on the lower teeth: the mean distance from jawOpen, %
   of its largest motion; ``largest jaw step``: over every edge off the lip line (the zoo's check 2: <= 0.3).
+
+``--place``: ``place`` at each density on the same copies, before (``rigid_weights`` switched off) and after:
+the largest spread of a small closed part's weights (largest difference of a vertex's row from the part's
+mean), over the eyeballs and over the teeth (``geometry.rigid_parts.closed_small_parts``).
 """
 from __future__ import annotations
 
@@ -99,11 +104,50 @@ def score(rig, var, V0, motion, before):
     return out
 
 
+def place_spreads(variants, heads):
+    """Print the ``--place`` table."""
+    from autobones.geometry import rigid_parts
+    from autobones.placement import pipeline as placing
+
+    print("| head | variant | density | eyeballs before -> after | teeth before -> after | s |")
+    print("|---|---|---|---|---|---:|")
+    for name in heads:
+        V0, F0 = load_mesh(ICT / f"{name}.obj")[:2]
+        lm0 = {k: np.asarray(v, dtype=np.float64) for k, v in read_landmarks(ICT / f"{name}.landmarks.json").items()}
+        for vname in variants:
+            var = zoo_checks.make_variant(vname, V0, F0, lm0, seed=0)
+            if var is None or vname == "jitter":
+                continue
+            parts = rigid_parts.closed_small_parts(var.V, var.F)
+            lm = var.lm
+            ex = np.linalg.norm(lm["exocanthion_l"] - lm["exocanthion_r"])
+            eye_at = [0.5 * (lm[f"exocanthion_{s}"] + lm[f"endocanthion_{s}"]) for s in "lr"]
+            near_eye = [min(np.linalg.norm(var.V[r].mean(axis=0) - e) for e in eye_at) < 0.3 * ex for r in parts]
+            eyes = [r for r, e in zip(parts, near_eye) if e]
+            teeth = [r for r, e in zip(parts, near_eye) if not e]
+            for density in ("sparse", "medium", "dense"):
+                got = []
+                for off in (True, False):
+                    with mock.patch.object(placing, "rigid_weights", lambda W, *a, **k: np.array(W)) if off \
+                            else mock.patch.object(placing, "rigid_weights", placing.rigid_weights):
+                        t = time.perf_counter()
+                        W = autobones.place((var.V, var.F), density=density).weights
+                        s = time.perf_counter() - t
+                    got.append([max((np.abs(W[r] - W[r].mean(axis=0)).max() for r in group), default=np.nan)
+                                for group in (eyes, teeth)])
+                (e0, t0), (e1, t1) = got
+                print(f"| {name} | {vname} | {density} | {e0:.2f} -> {e1:.2f} ({len(eyes)}) | {t0:.2f} -> {t1:.2f} "
+                      f"({len(teeth)}) | {s:.1f} |", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--variants", default=VARIANTS)
     ap.add_argument("--heads", default=",".join(HEADS))
+    ap.add_argument("--place", action="store_true", help="place's eyeballs and teeth instead")
     args = ap.parse_args(argv)
+    if args.place:
+        return place_spreads(args.variants.split(","), args.heads.split(","))
     D0 = truth_offsets()
     motion = np.linalg.norm(D0, axis=1)
     print("| head | variant | vertices | teeth | whole before -> after | right before -> after "
