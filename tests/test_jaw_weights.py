@@ -399,10 +399,10 @@ def test_teeth_ride_the_jaw_or_the_skull_whole(rigs):
     np.testing.assert_array_equal(again[teeth], jaw[teeth])
 
 
-def test_teeth_added_to_a_scan_ride_whole():
+def test_teeth_added_to_a_scan_ride_whole(rigs):
     """A stand-in off ICT's topology: two small boxes set inside james's closed mouth (a game head's
     separate upper and lower teeth), 0.3 ex-ex behind the stomion and 0.08 above and below its level: the upper
-    rides the skull, the lower the jaw, each whole."""
+    rides the skull, the lower the jaw, each whole; a stud set in the jaw's falloff moves whole as well."""
     import trimesh
 
     from autobones.orient import frame_from_landmarks
@@ -415,11 +415,18 @@ def test_teeth_added_to_a_scan_ride_whole():
         box = trimesh.creation.box(extents=(0.1 * fu,) * 3)
         up, front = frame.rotation[1], frame.rotation[2]   # canonical +Y, +Z in the head's frame
         parts.append((box.vertices + lm["stomion"] - 0.3 * fu * front + side * 0.08 * fu * up, box.faces))
+    # and a stud in the jaw's falloff farther than the mouth's reach (0.9 ex-ex) from the stomion: any small
+    # closed part moves whole
+    stud = trimesh.creation.box(extents=(0.06 * fu,) * 3)
+    jaw0 = _jaw(rigs("james")[3])
+    far = np.linalg.norm(V - lm["stomion"], axis=1) > 1.0 * fu
+    parts.append((stud.vertices + V[far][np.argmin(np.abs(jaw0[far] - 0.5))], stud.faces))
     Vt = np.vstack([p[0] for p in parts])
-    Ft = np.vstack([parts[0][1], parts[1][1] + len(V), parts[2][1] + len(V) + 8])
+    Ft = np.vstack([parts[0][1], parts[1][1] + len(V), parts[2][1] + len(V) + 8, parts[3][1] + len(V) + 16])
     rig = autobones.transfer((Vt, Ft), lm)
     jaw = _jaw(rig)
     np.testing.assert_array_equal(jaw[len(V):len(V) + 8], 0.0)
-    np.testing.assert_array_equal(jaw[len(V) + 8:], 1.0)
+    np.testing.assert_array_equal(jaw[len(V) + 8:len(V) + 16], 1.0)
+    assert np.ptp(rig.weights[len(V) + 16:], axis=0).max() == 0.0
     np.testing.assert_allclose(rig.weights.sum(axis=1), 1.0, atol=1e-12)
     assert len(rigid_mouth_parts(Vt, Ft, rig.weights, rig.skeleton.names, rig.skeleton.heads, rig.frame, lm)[1]) == 16

@@ -47,6 +47,7 @@ from .under_skin import carry_muscles, ride, under_skin_warp
 from ..io.jsonable import jsonable
 from ..io.mesh import resolve_mesh, wound_outward
 from ..io.parts import stray_parts, worn_parts
+from ..geometry.rigid_parts import closed_small_parts, rigid_weights
 from ..geometry.weights import prune_weights
 from ..rig import Rig
 from ..timing import Stopwatch
@@ -353,6 +354,8 @@ def _neck_and_jaw(V, F, W, skeleton, frame, lm, facial_mask, lap, fitted=None):
     W = carried_mouth_parts(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
     W = repair_jaw_weights(V, F, W, skeleton.names, lm, details=jaw_details, still=still)
     W = rigid_mouth_parts(V, F, W, skeleton.names, skeleton.heads, frame, lm)[0]
+    # any other small closed part (a cartoon's button eye off the eye bones, a stud) moves whole too
+    W = rigid_weights(W, V, F, closed_small_parts(V, F))
     if jaw_details.get("note"):
         log.warning("jaw: %s", jaw_details["note"])   # a head the landmarks cannot give a clean jaw cut
     lap("jaw")
