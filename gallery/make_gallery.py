@@ -34,6 +34,10 @@ and condyle predicted from the tragions as rings (``gallery/joints_gallery.py``)
 ``jaw_open_goat_robot``: the transferred jaw weight (green) on the goat and the robot, the jaw
 closed and opened 20 degrees by linear blend skinning: no torn flap.
 
+``transfer_teeth_jaw_open``: ICT identity001's 32 teeth and mouth bag alone, jaw weight in green, the jaw
+opened 23 degrees by linear blend skinning; top: before ``rig_transfer/mouth_parts.py`` (the lower teeth
+half left behind, the molars stretched), bottom: now (``gallery/teeth_gallery.py``).
+
 ``expressions_*``: the six emotion prototypes of ``generic_rig/expressions.json``
 (Erdoğdu 2010, Table 3-3) on a transferred rig (default head, ICT identity002, the robot, the goat
 and the james scan), neutral first, all from the front at one scale, in three rows: posed by
@@ -374,7 +378,8 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", choices=sorted(HEADS) + [f"transfer_{k}" for k in TRANSFERS]
                     + LANDMARK_PICTURES + ["landmarks"] + [f"expressions_{k}" for k in EXPRESSION_HEADS]
                     + ["expressions", "expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                       "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views"]
+                       "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views",
+                       "transfer_teeth_jaw_open"]
                     + ARKIT_PICTURES + ["arkit"],
                     help="'landmarks': the four landmark previews; 'expressions': the emotions on four heads; "
                          "'arkit': arkit_shapes and arkit_capture")
@@ -385,7 +390,8 @@ def main(argv=None):
     expression_pictures = [f"expressions_{k}" for k in EXPRESSION_HEADS]
     names = args.only or (list(HEADS) + [f"transfer_{k}" for k in TRANSFERS] + LANDMARK_PICTURES
                           + expression_pictures + ["expressions_sphincters", "jaw_open_goat_robot", "place_head_turn",
-                                                   "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views"]
+                                                   "transfer_head_turn", "transfer_symmetric_robot", "joints_side_views",
+                                                   "transfer_teeth_jaw_open"]
                           + ARKIT_PICTURES)
     names = [m for n in names for m in (LANDMARK_PICTURES if n == "landmarks" else
                                          expression_pictures if n == "expressions" else
@@ -441,6 +447,11 @@ def make(names, out):
             continue
         if name == "transfer_symmetric_robot":
             symmetric_picture(args.out)
+            continue
+        if name == "transfer_teeth_jaw_open":   # the mouth's separate parts (rig_transfer/mouth_parts.py)
+            from teeth_gallery import teeth_picture
+
+            teeth_picture(args.out)
             continue
         if name == "expressions_sphincters":
             sphincters_picture(args.out)
