@@ -10,7 +10,7 @@ from autobones.expressions.jaw import jaw_column, jaw_glide, jaw_weights, with_j
 from autobones.expressions.lids import (attach_lid_weights, eye_corners, eye_lid_weights, lid_attachments,
                                         lid_weights, margin_release)
 from autobones.expressions.mouth import mouth_line
-from autobones.expressions.mouth_parts import inner_mouth_parts, mouth_part_weights
+from autobones.geometry.mouth_parts import inner_mouth_parts, mouth_part_weights
 from autobones.expressions.surface import skin_surface
 from autobones.geometry.rotations import align_rotation, axis_rotation, euler_rotation, x_turn
 from shared_data import flat_grid

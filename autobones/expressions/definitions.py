@@ -12,6 +12,7 @@ import copy
 import os
 
 from ..errors import AutobonesError
+from ..geometry.mouth_parts import MOUTH_PARTS
 from ..io.files import read_json, shown
 from ..io.rig_schema import SchemaError, check_definitions, finite_float, no_constants
 
@@ -46,7 +47,7 @@ MODEL_DEFAULTS = {
         "hinge_band": 0.0,              # fissure heights: the corners hinge's reach from the margin
         "hinge_lower": False,           # the lower lids hinge too
     },
-    "mouth_parts": {"reach": 0.9, "band": 0.03, "rigid_size": 0.5, "pharynx": 0.1},   # fu
+    "mouth_parts": dict(MOUTH_PARTS),   # fu (geometry.mouth_parts: transfer's exported weights use the same)
 }
 
 # keys every definitions file must set (no fallback), by section ("" = the model section itself)

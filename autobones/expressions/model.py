@@ -51,6 +51,7 @@ import numpy as np
 
 from ..arguments import MAX_ANGLE, float_array, intensity_mixes, pose_angles, real
 from ..errors import AutobonesError, counted
+from ..geometry.mouth_parts import inner_mouth_parts, mouth_part_weights
 from ..geometry.winding import outward_faces
 from .bones import blend_bones, bone_transforms, turn_jaw, turn_lids
 from .creases import crease_fields
@@ -59,7 +60,6 @@ from .jaw import jaw_glide, jaw_weights
 from .lids import (LIDS, attach_hinge_share, attach_lid_weights, lid_attachments, lid_hinges, lid_weights,
                    margin_release, ride_lids)
 from .mouth import mouth_corners, mouth_line
-from .mouth_parts import inner_mouth_parts, mouth_part_weights
 from .muscles import check_muscle_kinds, influence_fields, muscles_from_rig
 from .rig_inputs import rig_inputs
 from .skull import REGIONS_DEFAULT, skull_clamp, slide_over_bone, tissue_thickness

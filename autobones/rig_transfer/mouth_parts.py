@@ -1,6 +1,6 @@
 """The mouth's separate inner parts on a transferred head (teeth, gums, tongue, a mouth bag): which
 ride the jaw and which the skull, by the rule the expression model poses them with
-(:mod:`autobones.expressions.mouth_parts`): a small part (a tooth) whole by its centre against the
+(:mod:`autobones.geometry.mouth_parts`): a small part (a tooth) whole by its centre against the
 occlusal level through the stomion, a larger one split vertex by vertex at the lower teeth's
 crowns, nothing behind the jaw joint riding the jaw.
 
@@ -26,9 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..expressions.definitions import MODEL_DEFAULTS
-from ..expressions.mouth_parts import inner_mouth_parts, mouth_part_weights
 from ..geometry.areas import triangle_areas
+from ..geometry.mouth_parts import MOUTH_PARTS, inner_mouth_parts, mouth_part_weights
 from ..geometry.topology import mesh_parts, weld
 
 EYE_REACH = 0.5   # fu above the stomion: parts centred higher (lashes, lid shells) are the eyes'
@@ -60,8 +59,8 @@ def rigid_mouth_parts(V, F, W, names, heads, frame, landmarks, params=None):
     landmarks : dict str -> (3,) float
         Head frame; nothing changes without ``stomion`` and both ``exocanthion``.
     params : dict, optional
-        ``reach``, ``band``, ``rigid_size``, ``pharynx`` (fu): the expression model's
-        ``mouth_parts`` (:data:`autobones.expressions.definitions.MODEL_DEFAULTS`) by default.
+        ``reach``, ``band``, ``rigid_size``, ``pharynx`` (fu): the expression model's defaults
+        (:data:`autobones.geometry.mouth_parts.MOUTH_PARTS`) unless given.
 
     Returns
     -------
@@ -78,7 +77,7 @@ def _mouth_parts(V, F, W, names, heads, frame, landmarks, params, small_only):
     need = ("stomion", "exocanthion_l", "exocanthion_r")
     if "jaw" not in names or "head" not in names or not all(k in landmarks for k in need):
         return W.copy(), np.zeros(0, dtype=np.int64)
-    p = dict(MODEL_DEFAULTS["mouth_parts"], **(params or {}))
+    p = dict(MOUTH_PARTS, **(params or {}))
     V = np.asarray(V, dtype=np.float64)
     Vc = frame.to_canonical(V)
     L = {k: frame.to_canonical(np.asarray(landmarks[k], dtype=np.float64).reshape(1, 3))[0] for k in need}

@@ -1,5 +1,9 @@
 """The mouth's separate inner parts (teeth, gums, tongue): which ride the jaw, which the skull.
 
+One rule for the expression model's jaw (:mod:`autobones.expressions.model`) and ``transfer``'s exported
+weights (:mod:`autobones.rig_transfer.mouth_parts`), so the two agree; its lengths (:data:`MOUTH_PARTS`)
+are the model's defaults, which ``generic_rig/expressions.json`` may override for the model.
+
 They are carried by the mandible below the occlusal plane and by the skull above it (taken level
 through the stomion): a small part (a tooth) rides one bone by its centre; a large one (gums with
 the tongue) splits vertex by vertex over a narrow band at the crowns of the lower teeth, when
@@ -13,7 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.smooth import ramp
+from .smooth import ramp
+
+# fu: a part centred within ``reach`` of the stomion (and not in front of it) is inside the mouth; up to
+# ``rigid_size`` across it goes whole; larger ones split over +-``band`` at the lower crowns; the pharynx is
+# held from ``pharynx`` behind the jaw joint
+MOUTH_PARTS = {"reach": 0.9, "band": 0.03, "rigid_size": 0.5, "pharynx": 0.1}
 
 
 def inner_mouth_parts(V, part, candidates, stomion, fu, reach, rigid_size):
