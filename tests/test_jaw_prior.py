@@ -202,9 +202,13 @@ def test_open_jaw_target_face_and_neck_stay_in_place(ict_rigged):
     # Since transfer's neck step (rig_transfer/neck.py: the head share through the head joint, under
     # the chin) the prior read off this transferred rig has jaw weights up to 0.3 different near the
     # menton: face 1.29 / 5.2, neck 0.95 / 3.65 (no prior 3.3 / 9.4 and 4.8 / 9.0); the built-in
-    # rig's own prior, which transfer uses, is not touched by that step
+    # rig's own prior, which transfer uses, is not touched by that step.
+    # Since the mouth's separate parts ride the jaw (rig_transfer/mouth_parts.py: the lower teeth jaw 1, the
+    # mouth bag from the expression model's split) and the spread's normalisation leaves the teeth out
+    # (jaw_prior.spread_jaw_weight): the angle 20.0 -> 25.3 degrees, ICT's own lower teeth's turn; face
+    # 1.47 / 5.79 -> 1.49 / 5.78, neck 0.70 / 2.27 -> 0.73 / 2.61 (the teeth in the normalisation: 35.9 degrees)
     p, n = err["prior"], err["none"]
-    assert 15.0 < p["angle"] < 25.0, err
+    assert 18.0 < p["angle"] < 30.0, err
     assert p["face"][0] < 1.6 and p["face"][1] < 7.0, err
     assert p["neck"][0] < 1.0 and p["neck"][1] < 3.8, err
     assert p["face"][1] < 0.85 * n["face"][1] and p["neck"][1] < 0.6 * n["neck"][1], err
