@@ -276,17 +276,13 @@ def jaw_open_picture(out, degrees=20.0, size=380):
     """``jaw_open_goat_robot.png``: each head transferred, its jaw weight in green, closed and with
     the jaw bone turned ``degrees`` open by linear blend skinning (what a glTF viewer does), three
     quarter and side views; one row a head."""
+    from teeth_gallery import opened_jaw
+
     rows = []
     for name in JAW_HEADS:
         mesh, marks = TRANSFERS[name]
         rig = autobones.transfer(DATA / mesh, HERE.parent / marks)
-        j = rig.skeleton.names.index("jaw")
-        jaw = rig.weights[:, j][:, None]
-        C = rig.frame.to_canonical(rig.vertices)
-        pivot = rig.frame.to_canonical(rig.skeleton.heads[[j]])[0]
-        t = np.radians(degrees)
-        R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(t), -np.sin(t)], [0.0, np.sin(t), np.cos(t)]])
-        opened = C + jaw * ((C - pivot) @ R.T + pivot - C)  # about the left-right axis, chin down
+        C, opened, jaw, pivot = opened_jaw(rig, degrees)
         colours = np.array([0.85, 0.85, 0.85]) * (1 - jaw) + np.array([0.15, 0.75, 0.2]) * jaw
         views = ("three_quarter", "side")
         rows.append(np.concatenate([render.render_views(P, rig.faces, vertex_colors=colours, views=views,

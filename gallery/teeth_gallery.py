@@ -28,15 +28,17 @@ HERE = Path(__file__).resolve().parent
 ICT = HERE.parent.parent / "shared" / "data" / "ict"
 
 
-def _opened(rig, degrees):
-    """(canonical vertices, opened canonical vertices, jaw weight (n,)) of ``rig`` with its jaw turned open."""
+def opened_jaw(rig, degrees):
+    """(canonical vertices, opened canonical vertices, jaw weight (n, 1), canonical jaw joint (3,)) of
+    ``rig`` with its jaw bone turned ``degrees`` open about the left-right axis (chin down) by linear
+    blend skinning, what a glTF player does (``jaw_open_goat_robot`` uses it too)."""
     j = rig.skeleton.names.index("jaw")
     jaw = rig.weights[:, j][:, None]
     C = rig.frame.to_canonical(rig.vertices)
     pivot = rig.frame.to_canonical(rig.skeleton.heads[[j]])[0]
     t = np.radians(degrees)
     R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(t), -np.sin(t)], [0.0, np.sin(t), np.cos(t)]])
-    return C, C + jaw * ((C - pivot) @ R.T + pivot - C), jaw
+    return C, C + jaw * ((C - pivot) @ R.T + pivot - C), jaw, pivot
 
 
 def teeth_picture(out, degrees=23.0, size=420):
@@ -51,7 +53,7 @@ def teeth_picture(out, degrees=23.0, size=420):
     after = autobones.transfer((V, F), lm)
     rows = []
     for rig in (before, after):
-        C, opened, jaw = _opened(rig, degrees)
+        C, opened, jaw, _ = opened_jaw(rig, degrees)
         colours = np.array([0.85, 0.85, 0.85]) * (1 - jaw) + np.array([0.15, 0.75, 0.2]) * jaw
         keep = np.unique(inner)   # framed on the mouth's parts alone
         remap = np.zeros(len(V), dtype=np.int64)
