@@ -93,19 +93,6 @@ def test_the_generic_rigs_own_landmarks_read_off_are_within_the_measured_bound()
     assert max(err.values()) < 21.0, err
 
 
-def test_a_human_face_is_told_from_an_animal_by_its_five_names():
-    from autobones.landmarks.assist import HUMAN_FACE, face_distance, generic_skin
-
-    generic = generic_skin()[0].landmarks
-    assert face_distance(generic, generic) == pytest.approx(0.0, abs=1e-12)
-    human = face_distance(_head("ict/identity000")[2], generic)            # measured 0.026
-    cow = face_distance(read_landmarks(ROOT / "tests" / "landmarks" / "cowHead.landmarks.json"), generic)  # 0.169
-    assert human < HUMAN_FACE < cow
-    R = Rotation.from_euler("xyz", [10, 80, -35], degrees=True).as_matrix()
-    turned = {n: 7.0 * R @ p + 3.0 for n, p in generic.items()}
-    assert face_distance(turned, generic) == pytest.approx(0.0, abs=1e-9)
-
-
 def test_every_contract_name_is_returned_given_ones_unchanged(identity000):
     V, F, truth, out = identity000
     assert list(out.points) == [n for n in NAMES if n in out.points]

@@ -14,9 +14,10 @@ corners; everything else is read off the generic head fitted to the mesh:
    or for the built-in rig where hand-placed landmarks of human heads land on its fitted skin
    (:mod:`autobones.landmarks.assist_calibration`: the generic's landmarks follow geometric
    rules on a procedural head, not the way people place the names);
-3. on a human-proportioned face (:func:`face_distance` of the five to the generic's) the menton
-   is moved to the lowest point of the midline profile near it
-   (:func:`autobones.landmarks.refine.on_profile`): the fitted chin is not the head's;
+3. on a human face (:func:`autobones.landmarks.human_face.is_human_face`: the five against the
+   generic's, which may wear an expression of its expression space) the menton is moved to the
+   lowest point of the midline profile near it (:func:`autobones.landmarks.refine.on_profile`):
+   the fitted chin is not the head's;
 4. a confidence per name (:func:`confidence`) from how well the fit meets the head there and
    how far the name lies from the given points.
 
@@ -36,7 +37,6 @@ import numpy as np
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
-from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
 from ..geometry.validate import mesh_arrays
 from ..geometry.winding import outward_faces
@@ -44,6 +44,7 @@ from ..io.landmark_checks import validate_landmarks
 from ..io.landmark_names import NAMES
 from ..orient import Frame, frame_from_landmarks
 from ..rig_transfer.under_skin import ride
+from .human_face import expression_displacements, hinge_displacement, is_human_face
 from .refine import on_profile, symmetry_plane
 
 #: The names an assisted placement needs: well spread over the face, easy to click on any head.
@@ -56,9 +57,6 @@ HALF_DISTANCE = 1.0
 #: Fit residual (ex-ex) at which confidence falls to 1/e: the fitted generic skin's distance
 #: to the head before it was stuck on (a part of the generic the head does not have is far off).
 RESIDUAL_SCALE = 0.1
-
-#: Largest :func:`face_distance` of a human-proportioned face (between the humans' 0.044 and 0.072).
-HUMAN_FACE = 0.06
 
 #: A detection whose own five names lie farther than this (ex-ex, RMS) from the given ones found
 #: another face, or this one badly: it is not used.
@@ -243,8 +241,9 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
     detected : dict str -> (3,), "auto" or None
         Landmarks found automatically on this head (:func:`autobones.detect_landmarks`; a
         ``DetectedLandmarks`` brings its confidences), or ``"auto"``: run the detector when the
-        five say the face is human-proportioned and the optional detector is installed. On such a
-        face the names it found replace the fit's proposals, when its own five agree with the given
+        five say the face is a person's (:func:`autobones.landmarks.human_face.is_human_face`, an
+        expression allowed) and the optional detector is installed. On such a face the names it found
+        replace the fit's proposals, when its own five agree with the given
         ones (:data:`DETECTED_AGREE`): on the nine human heads of the shared data set the names
         within 5 % of ex-ex of the hand-placed ones went from 50 % to 71 % (benchmarks/README.md).
         None: the fit alone.
@@ -279,7 +278,8 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         found, c = _read_names(fit, V, F, [reading[n] for n in wanted], given, unit)
         points.update(zip(wanted, found))
         conf.update(zip(wanted, map(float, c)))
-    human = all(n in generic.landmarks for n in REQUIRED) and face_distance(given, generic.landmarks) <= HUMAN_FACE
+    human = all(n in generic.landmarks for n in REQUIRED) and is_human_face(
+        given, generic.landmarks, *_reference_motion(generic, rig))
     if human and "menton" in points and "menton" not in given:
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
@@ -291,6 +291,18 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
     points = {n: points[n] for n in sorted(points, key=order.get)}
     return Assisted(points=points, confidence={n: conf[n] for n in points}, omitted=omitted,
                     frame=frame_from_landmarks(V, F, points), unit=unit)
+
+
+def _reference_motion(generic, rig):
+    """How the generic's expression space and its jaw's hinge move the five names: ((k, 5, 3) or
+    None without a space, (1, 5, 3) or None without ``jaw`` and ``head`` bones)."""
+    from ..rig_transfer.pipeline import generic_expression_space
+
+    space = generic_expression_space(generic, rig)
+    jaw = generic_skin(rig)[1]   # a folder's is memoised; a rig object's is computed again
+    skin = (generic.landmarks, generic.vertices, generic.faces)
+    return (None if space is None else expression_displacements(*skin, space["basis"]),
+            None if jaw is None else hinge_displacement(*skin, jaw))
 
 
 def _detect(V, F):
@@ -321,21 +333,6 @@ def with_detected(points, confidence, given, detected, unit):
             points[n] = np.asarray(detected[n], dtype=np.float64)
             confidence[n] = float(scores.get(n, 1.0))
     return points, confidence
-
-
-def face_distance(given, reference):
-    """How far the five given names are from a reference face's (the generic human's), after the best
-    rotation, translation and uniform scale: RMS distance in ex-ex, over :data:`REQUIRED`.
-
-    The nine landmarked human heads of the shared data set measure 0.020-0.044; animals and cartoons
-    0.072 (a humanoid monster) to 0.28 (a camel): :data:`HUMAN_FACE` lies between.
-    """
-    A = np.array([given[n] for n in REQUIRED], dtype=np.float64)
-    B = np.array([reference[n] for n in REQUIRED], dtype=np.float64)
-    A = (A - A.mean(axis=0)) / np.linalg.norm(A[0] - A[1])
-    B = (B - B.mean(axis=0)) / np.linalg.norm(B[0] - B[1])
-    scale, R = similarity(A, B)   # a proper rotation (a mirrored face is not the same face)
-    return float(np.sqrt(((scale * A @ R.T - B) ** 2).sum(axis=1).mean()))
 
 
 def _read_names(fit, V, F, where, given, unit):

@@ -1,0 +1,157 @@
+"""Is a face human? Five landmarks against a human face that may wear an expression.
+
+``landmarks --assist`` treats a human face otherwise than an animal's: it runs the automatic
+detector and takes the chin's lowest point off the midline profile. It decides from the five
+given names alone (outer eye corners, nose tip, mouth corners), by their shape against the
+generic human's after the best rotation, translation and uniform scale (:func:`face_distance`).
+
+A neutral reference alone told a smiling or open-mouthed person from a cartoon poorly: the mouth
+corners move 0.05-0.1 ex-ex in an expression, as far as a humanoid monster's face differs from a
+person's (ICT identity000 with an open jaw 0.084, puckered 0.088, smiling 0.063; the beast 0.072).
+So the reference may wear an expression: the generic rig's expression space (ICT-FaceKit's ARKit
+shapes carried onto its skin, ``expressions.npz``; Li et al. 2020) read at the five names, its
+weights in [0, 1] solved with the similarity (bounded least squares with a small ridge, alternated
+with Umeyama's similarity a few rounds), as model-based face fitting solves expression with pose
+(Blanz & Vetter 1999), and the jaw may open on its hinge (an articulation, not a learned shape:
+:func:`hinge_displacement`). Over the shared heads (benchmarks/README.md, "a person wearing an
+expression is a person"): nine neutral human heads 0.006-0.018, three ICT identities wearing five
+expressions 0.003-0.020 (0.005-0.042 with the expression's own shapes left out of the space); eleven
+animals, cartoons and statues 0.065 (a humanoid monster) to 0.199 (a camel), so
+:data:`HUMAN_FACE_EXPRESSIVE` lies between. Without a space (a rig given as an
+object, a rig folder without the file) the neutral reference and :data:`HUMAN_FACE`.
+
+Distances are in units of the five's own ex-ex (RMS over the five points); all functions are pure.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from ..geometry.closest import closest_points
+from ..geometry.rotations import similarity
+
+#: The five names the distance is measured on (the assisted landmarks' required set).
+FIVE = ("exocanthion_l", "exocanthion_r", "pronasale", "cheilion_l", "cheilion_r")
+
+#: Largest neutral :func:`face_distance` of a human-proportioned face (between the neutral humans'
+#: 0.044 and the beast's 0.072).
+HUMAN_FACE = 0.06
+
+#: Largest expression-tolerant :func:`face_distance` of a human face (between the humans' 0.042,
+#: expressive ones with their expression left out of the space included, and the beast's 0.065).
+HUMAN_FACE_EXPRESSIVE = 0.05
+
+#: Ridge on the expression weights against the squared RMS residual (ex-ex^2 summed over the 15
+#: coordinates): 1e-4 let a bunny wear a smile down to 0.060; 1e-2 left an open jaw (space alone) at 0.044.
+RIDGE = 1e-3
+
+#: The jaw opening (degrees) one unit of :func:`hinge_displacement`'s weight stands for (ICT's
+#: jawOpen turns the lower teeth about 25 degrees).
+HINGE_DEG = 30.0
+
+#: Rounds of (similarity, weights): the distances settle to 1e-4 ex-ex within four on the shared heads.
+ROUNDS = 6
+
+
+def _normalised(X):
+    """(5, 3) points centred and scaled to unit ex-ex (rows 0 and 1 the outer eye corners)."""
+    X = X - X.mean(axis=0)
+    return X / np.linalg.norm(X[0] - X[1])
+
+
+def _on_skin(reference, vertices, faces):
+    """The five names' triangles on the generic skin and their barycentric coordinates: (face (5,)
+    int, bary (5, 3) float, F (m, 3) int64)."""
+    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+    F = np.asarray(faces, dtype=np.int64)
+    _, face, bary, _ = closest_points(B0, np.asarray(vertices, dtype=np.float64), F)
+    return face, bary, F
+
+
+def expression_displacements(reference, vertices, faces, basis):
+    """How each expression moves the five names on the generic skin.
+
+    Parameters
+    ----------
+    reference : dict str -> (3,)
+        The generic's landmarks (its frame), at least :data:`FIVE`, on or near its skin.
+    vertices, faces : (n, 3) float, (m, 3) int
+        The generic's rest skin.
+    basis : (k, n, 3) float
+        The expression space's displacement fields on that skin (its units).
+
+    Returns
+    -------
+    (k, 5, 3) float64: each name's displacement at its barycentric point in its nearest triangle.
+    """
+    face, bary, F = _on_skin(reference, vertices, faces)
+    return np.einsum("pj,kpjc->kpc", bary, np.asarray(basis, dtype=np.float64)[:, F[face]])
+
+
+def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG):
+    """How opening the generic's jaw by ``degrees`` moves the five names: (1, 5, 3) float64.
+
+    ``jaw`` is the generic's jaw prior (:func:`autobones.rig_transfer.jaw_prior.jaw_prior`: a
+    per-vertex ``weight`` (n,), the hinge's ``pivot`` and ``axis`` (3,), its ``glide`` (3,) per
+    degree), read at the names' barycentric points. An articulation, not a learned shape: it covers
+    an open mouth whatever expression space the rig carries (left out of ICT's, an open jaw's
+    distance falls from 0.069-0.074 to 0.025-0.031 with it)."""
+    from ..rig_transfer.jaw_prior import open_jaw
+
+    face, bary, F = _on_skin(reference, vertices, faces)
+    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+    weight = np.einsum("pj,pj->p", bary, np.asarray(jaw["weight"], dtype=np.float64)[F[face]])
+    return (open_jaw(B0, weight, jaw["pivot"], jaw["axis"], degrees, jaw.get("glide")) - B0)[None]
+
+
+def face_distance(given, reference, displacements=None, ridge=RIDGE, rounds=ROUNDS):
+    """How far the five ``given`` names (name -> (3,), any frame and unit) are from a human face.
+
+    The RMS distance (in ex-ex) over :data:`FIVE` between the given shape and the ``reference``'s
+    (name -> (3,)), after the best similarity (a proper rotation: a mirrored face is not the same
+    face). With ``displacements`` ((k, 5, 3), :func:`expression_displacements`) the reference may
+    wear any combination of them, weights in [0, 1] with a ``ridge`` on their squares, solved
+    alternately with the similarity for ``rounds`` rounds; the smaller of that and the neutral
+    distance is returned.
+    """
+    A = _normalised(np.array([given[n] for n in FIVE], dtype=np.float64))
+    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+
+    def distance(B):
+        Bn = _normalised(B)
+        s, R = similarity(A, Bn)
+        return float(np.sqrt(((s * A @ R.T - Bn) ** 2).sum(axis=1).mean())), s * A @ R.T
+
+    best, fitted = distance(B0)
+    if displacements is None or not len(displacements):
+        return best
+    D = np.asarray(displacements, dtype=np.float64)
+    k = len(D)
+    # the weights' problem linearised about the neutral reference's normalisation (its centre and
+    # ex-ex), the distance itself measured exactly with each round's weights
+    scale = np.linalg.norm(B0[0] - B0[1])
+    M = (D - D.mean(axis=1, keepdims=True)).reshape(k, -1).T / scale
+    M = np.vstack([M, np.sqrt(ridge) * np.eye(k)])
+    for _ in range(rounds):
+        y = np.concatenate([(fitted - (B0 - B0.mean(axis=0)) / scale).ravel(), np.zeros(k)])
+        w = lsq_linear(M, y, bounds=(0.0, 1.0)).x
+        d, fitted = distance(B0 + np.einsum("k,kpc->pc", w, D))
+        best = min(best, d)
+    return best
+
+
+def is_human_face(given, reference, expressions=None, hinge=None):
+    """True when the five ``given`` names are a human face's.
+
+    :func:`face_distance` to the ``reference`` wearing any of ``expressions`` ((k, 5, 3),
+    :func:`expression_displacements`) and the jaw's ``hinge`` ((1, 5, 3), :func:`hinge_displacement`),
+    either may be None: at most :data:`HUMAN_FACE_EXPRESSIVE` with an expression space, else at most
+    :data:`HUMAN_FACE` (the neutral reference, its jaw free to open when ``hinge`` is given).
+    """
+    parts = [np.asarray(d, dtype=np.float64) for d in (expressions, hinge) if d is not None and len(d)]
+    d = face_distance(given, reference, np.concatenate(parts) if parts else None)
+    return d <= (HUMAN_FACE_EXPRESSIVE if expressions is not None and len(expressions) else HUMAN_FACE)
+
+
+__all__ = ["FIVE", "HINGE_DEG", "HUMAN_FACE", "HUMAN_FACE_EXPRESSIVE", "RIDGE", "expression_displacements",
+           "face_distance", "hinge_displacement", "is_human_face"]
