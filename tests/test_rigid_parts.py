@@ -55,6 +55,8 @@ def test_rigid_weights_one_row_per_part():
     rest = np.setdiff1d(np.arange(len(V)), np.concatenate(ranges[1:3]))
     np.testing.assert_array_equal(out[rest], W[rest])
     np.testing.assert_allclose(out.sum(axis=1), 1.0, atol=1e-12)
+    assert not np.shares_memory(out, W)            # with parts: a new array, the input untouched
+    assert rigid_weights(W, V, F, []) is W         # without: no copy (a head without teeth pays nothing)
 
 
 def test_place_moves_ict_eyeballs_and_teeth_whole(rigs):

@@ -89,12 +89,13 @@ def rigid_weights(W, V, F, parts, prune=0.01):
 
     Returns
     -------
-    (n, b) float
-        A new array; rows still sum to 1.
+    (n, b) float64
+        A new array, rows still summing to 1; ``W`` itself (as float64) when there are no parts: a
+        head without teeth or eyeballs pays no copy (272 MB at a million vertices and 34 bones).
     """
-    W = np.array(W, dtype=np.float64)
     if not parts:
-        return W
+        return np.asarray(W, dtype=np.float64)
+    W = np.array(W, dtype=np.float64)
     a = vertex_areas(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64))
     for rows in parts:
         w = a[rows] if a[rows].sum() > 0 else np.ones(len(rows))
