@@ -205,6 +205,34 @@ def test_start_from_a_file_or_detection_or_empty_with_a_note(tmp_path, marks, mo
     assert not os.listdir(tmp_path)
 
 
+def test_proposals_on_a_persons_face_are_landmarks_assists_own(tmp_path):
+    # `landmarks --edit --assist FIVE` and `landmarks --assist FIVE -o OUT` propose the same names: on a
+    # person's face the detector's where it finds them (found once per head), the fit's for the rest
+    from autobones.io.landmarks import write_landmarks
+    from autobones.landmarks.assist import REQUIRED, assist_landmarks
+
+    marks = read_landmarks(LEE_MARKS)
+    five = {n: marks[n] for n in REQUIRED}
+    write_landmarks(str(tmp_path / "five.landmarks.json"), five)
+    sess = open_session(str(data(LEE)), output=str(tmp_path / "o.json"), source=str(tmp_path / "five.landmarks.json"))
+    assert sess.detection is None                        # started from the file: nothing detected yet
+    got = sess.assist(_lists(five))["points"]
+    cli = assist_landmarks(sess.V, sess.F, five, detected="auto").points
+    fit = assist_landmarks(sess.V, sess.F, five).points
+    assert set(got) == set(cli) - set(five)
+    for n in got:
+        np.testing.assert_allclose(got[n], cli[n], atol=1e-9, err_msg=n)
+    moved = [n for n in got if np.linalg.norm(cli[n] - fit[n]) > 1e-6]
+    assert len(moved) >= 10, moved                       # the detector's names replaced the fit's
+    assert sess.detection                                # kept for the next proposal
+    blind = open_session(str(data(LEE)), output=str(tmp_path / "o.json"), source=str(tmp_path / "five.landmarks.json"),
+                         detect=False)
+    for n, p in blind.assist(_lists(five))["points"].items():
+        np.testing.assert_allclose(p, fit[n], atol=1e-9, err_msg=n)
+    assert blind.detection is None
+    assert sorted(os.listdir(tmp_path)) == ["five.landmarks.json"]
+
+
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys, monkeypatch):
     sys.path.insert(0, str(ROOT))
     from cli.main import main

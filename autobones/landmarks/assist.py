@@ -238,14 +238,15 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         calibrated reading (:func:`autobones.landmarks.assist_calibration.built_in_reading`: where
         hand-placed landmarks of human heads land on the fitted generic skin), for another rig its
         own landmarks.
-    detected : dict str -> (3,), "auto" or None
+    detected : dict str -> (3,), callable, "auto" or None
         Landmarks found automatically on this head (:func:`autobones.detect_landmarks`; a
-        ``DetectedLandmarks`` brings its confidences), or ``"auto"``: run the detector when the
-        five say the face is a person's (:func:`autobones.landmarks.human_face.is_human_face`, an
-        expression allowed) and the optional detector is installed. On such a face the names it found
-        replace the fit's proposals, when its own five agree with the given
-        ones (:data:`DETECTED_AGREE`): on the nine human heads of the shared data set the names
-        within 5 % of ex-ex of the hand-placed ones went from 50 % to 71 % (benchmarks/README.md).
+        ``DetectedLandmarks`` brings its confidences); a function of no argument returning them or
+        None (called only on a human face: the editor keeps one detection per head); or ``"auto"``:
+        run the detector. Used only when the five say the face is a person's
+        (:func:`autobones.landmarks.human_face.is_human_face`, an expression allowed): the names it
+        found replace the fit's proposals, when its own five agree with the given ones
+        (:data:`DETECTED_AGREE`): on the nine human heads of the shared data set the names within
+        5 % of ex-ex of the hand-placed ones went from 50 % to 71 % (benchmarks/README.md).
         None: the fit alone.
 
     Returns
@@ -285,7 +286,10 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
         points = on_profile(V, F, points, *symmetry_plane(points), unit, names=("menton",))
     if human and detected is not None:
-        found = _detect(V, F) if isinstance(detected, str) and detected == "auto" else detected
+        if isinstance(detected, str) and detected == "auto":
+            found = _detect(V, F)
+        else:
+            found = detected() if callable(detected) else detected
         points, conf = with_detected(points, conf, given, found, unit)
     order = {n: i for i, n in enumerate(NAMES)}
     points = {n: points[n] for n in sorted(points, key=order.get)}

@@ -53,6 +53,9 @@ class EditSession:
         name -> [0, 1] for detected starting landmarks.
     note : str or None
         One line for the page (e.g. why it starts empty).
+    detect : bool
+        Whether automatic detection may run: the proposals use the detector's names on a person's face,
+        as ``landmarks --assist`` does (:func:`autobones.landmarks.assist.assist_landmarks`).
     """
 
     head: str
@@ -66,6 +69,12 @@ class EditSession:
     note: str = None
     rig: str = None
     saved: list = field(default_factory=list)
+    detect: bool = True
+    up: str = None        # the axes given on the command line, for a detection at the first proposal
+    front: str = None
+    # the head's automatic landmarks, found once (at the start, or at the first proposal on a person's
+    # face) and kept: None not yet tried, False found none
+    detection: object = None
 
     def page_facts(self):
         """What the page needs to start: names by group with where each goes, the start, the display frame."""
@@ -124,12 +133,25 @@ class EditSession:
             raise AutobonesError(assist_missing())
         from ..landmarks.assist import assist_landmarks
 
-        # every name placed is given: the fit follows all the user has placed, not only the five it needs
-        got = assist_landmarks(self.V, self.F, lm, rig=self.rig)
+        # every name placed is given: the fit follows all the user has placed, not only the five it needs;
+        # on a person's face the detector's names where it finds them, as `landmarks --assist` proposes
+        got = assist_landmarks(self.V, self.F, lm, rig=self.rig, detected=self._detected if self.detect else None)
         points = {n: [float(c) for c in np.asarray(p, dtype=np.float64).reshape(3)]
                   for n, p in got.points.items() if n in NAMES and n not in lm}
         conf = {n: round(float(got.confidence.get(n, 0.0)), 3) for n in points}
         return {"points": points, "confidence": conf}
+
+    def _detected(self):
+        """The head's automatic landmarks (None: none found or the detector not installed), found once."""
+        if self.detection is None:
+            import autobones
+
+            try:
+                self.detection = autobones.detect_landmarks((self.V, self.F), up=self.up, front=self.front,
+                                                            name=self.head) or False
+            except AutobonesError:
+                self.detection = False
+        return self.detection or None
 
     def save(self, landmarks):
         """Write the landmarks (the contract JSON, and the ``.pp`` when asked), each atomically.
@@ -229,16 +251,18 @@ def open_session(head, output=None, pp=None, source=None, up=None, front=None, d
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
     frame = detect_frame(V, F, up=up, front=front)
-    confidence, note = {}, None
+    confidence, note, detection = {}, None, None
     if source:
         note = f"started from {os.path.basename(source)} ({len(start)} landmarks)"
     elif detect:
         try:
-            found = autobones.detect_landmarks((V, F), up=up, front=front, name=head)
-            start, confidence = dict(found), dict(found.confidence)
+            detection = autobones.detect_landmarks((V, F), up=up, front=front, name=head)
+            start, confidence = dict(detection), dict(detection.confidence)
             note = f"{len(start)} landmarks found automatically: check each"
         except AutobonesError as exc:
+            detection = False
             note = f"no landmarks found automatically ({str(exc).split(';')[0]}); place them by hand"
     return EditSession(head=head, V=V, F=F, frame=frame, output=output, pp_output=pp, start=start,
-                       confidence=confidence, note=note, rig=rig)
+                       confidence=confidence, note=note, rig=rig, detect=detect, detection=detection,
+                       up=up, front=front)
 
