@@ -20,13 +20,18 @@ animals, cartoons and statues 0.065 (a humanoid monster) to 0.199 (a camel), so
 :data:`HUMAN_FACE_EXPRESSIVE` lies between. Without a space (a rig given as an
 object, a rig folder without the file) the neutral reference and :data:`HUMAN_FACE`.
 
-Distances are in units of the five's own ex-ex (RMS over the five points); all functions are pure.
+The joints' face gate (:func:`autobones.rig_transfer.joints.face_fit`: may a face's landmarks place a
+rig's head and jaw joints?) measures the same distance over every name the face shares with the generic
+(``names=``), with its own bound.
+
+Distances are in units of the given ex-ex (RMS over the points); all functions are pure.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.rotations import similarity
 
@@ -54,42 +59,44 @@ ROUNDS = 6
 
 
 def _normalised(X):
-    """(5, 3) points centred and scaled to unit ex-ex (rows 0 and 1 the outer eye corners)."""
+    """(k, 3) points centred and scaled to unit ex-ex (rows 0 and 1 the outer eye corners)."""
     X = X - X.mean(axis=0)
     return X / np.linalg.norm(X[0] - X[1])
 
 
-def _on_skin(reference, vertices, faces):
-    """The five names' triangles on the generic skin and their barycentric coordinates: (face (5,)
-    int, bary (5, 3) float, F (m, 3) int64)."""
-    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+def _on_skin(reference, vertices, faces, names):
+    """The names' triangles on the generic skin and their barycentric coordinates: (face (k,) int,
+    bary (k, 3) float, F (m, 3) int64)."""
+    B0 = np.array([reference[n] for n in names], dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     _, face, bary, _ = closest_points(B0, np.asarray(vertices, dtype=np.float64), F)
     return face, bary, F
 
 
-def expression_displacements(reference, vertices, faces, basis):
-    """How each expression moves the five names on the generic skin.
+def expression_displacements(reference, vertices, faces, basis, names=FIVE):
+    """How each expression moves the ``names`` (default the five) on the generic skin.
 
     Parameters
     ----------
     reference : dict str -> (3,)
-        The generic's landmarks (its frame), at least :data:`FIVE`, on or near its skin.
+        The generic's landmarks (its frame), at least ``names``, on or near its skin.
     vertices, faces : (n, 3) float, (m, 3) int
         The generic's rest skin.
     basis : (k, n, 3) float
         The expression space's displacement fields on that skin (its units).
+    names : sequence of str
+        The names, in the order :func:`face_distance` is given them.
 
     Returns
     -------
-    (k, 5, 3) float64: each name's displacement at its barycentric point in its nearest triangle.
+    (k, len(names), 3) float64: each name's displacement at its barycentric point in its nearest triangle.
     """
-    face, bary, F = _on_skin(reference, vertices, faces)
+    face, bary, F = _on_skin(reference, vertices, faces, names)
     return np.einsum("pj,kpjc->kpc", bary, np.asarray(basis, dtype=np.float64)[:, F[face]])
 
 
-def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG):
-    """How opening the generic's jaw by ``degrees`` moves the five names: (1, 5, 3) float64.
+def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG, names=FIVE):
+    """How opening the generic's jaw by ``degrees`` moves the ``names``: (1, len(names), 3) float64.
 
     ``jaw`` is the generic's jaw prior (:func:`autobones.rig_transfer.jaw_prior.jaw_prior`: a
     per-vertex ``weight`` (n,), the hinge's ``pivot`` and ``axis`` (3,), its ``glide`` (3,) per
@@ -98,24 +105,27 @@ def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG):
     distance falls from 0.069-0.074 to 0.025-0.031 with it)."""
     from ..rig_transfer.jaw_prior import open_jaw
 
-    face, bary, F = _on_skin(reference, vertices, faces)
-    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+    face, bary, F = _on_skin(reference, vertices, faces, names)
+    B0 = np.array([reference[n] for n in names], dtype=np.float64)
     weight = np.einsum("pj,pj->p", bary, np.asarray(jaw["weight"], dtype=np.float64)[F[face]])
     return (open_jaw(B0, weight, jaw["pivot"], jaw["axis"], degrees, jaw.get("glide")) - B0)[None]
 
 
-def face_distance(given, reference, displacements=None, ridge=RIDGE, rounds=ROUNDS):
-    """How far the five ``given`` names (name -> (3,), any frame and unit) are from a human face.
+def face_distance(given, reference, displacements=None, ridge=RIDGE, rounds=ROUNDS, names=FIVE):
+    """How far the ``given`` names (name -> (3,), any frame and unit) are from a human face.
 
-    The RMS distance (in ex-ex) over :data:`FIVE` between the given shape and the ``reference``'s
-    (name -> (3,)), after the best similarity (a proper rotation: a mirrored face is not the same
-    face). With ``displacements`` ((k, 5, 3), :func:`expression_displacements`) the reference may
+    The RMS distance (in ex-ex) over ``names`` (default :data:`FIVE`; the two outer eye corners
+    first) between the given shape and the ``reference``'s (name -> (3,)), after the best similarity
+    (a proper rotation: a mirrored face is not the same face). With ``displacements``
+    ((k, len(names), 3), :func:`expression_displacements` of the same names) the reference may
     wear any combination of them, weights in [0, 1] with a ``ridge`` on their squares, solved
     alternately with the similarity for ``rounds`` rounds; the smaller of that and the neutral
     distance is returned.
     """
-    A = _normalised(np.array([given[n] for n in FIVE], dtype=np.float64))
-    B0 = np.array([reference[n] for n in FIVE], dtype=np.float64)
+    if tuple(names[:2]) != ("exocanthion_l", "exocanthion_r"):
+        raise AutobonesError("face_distance: the names must start with exocanthion_l, exocanthion_r (the unit)")
+    A = _normalised(np.array([given[n] for n in names], dtype=np.float64))
+    B0 = np.array([reference[n] for n in names], dtype=np.float64)
 
     def distance(B):
         Bn = _normalised(B)

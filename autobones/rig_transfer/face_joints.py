@@ -22,7 +22,7 @@ from __future__ import annotations
 from ..errors import AutobonesError
 from ..generic_rig import default_rig_path
 from .joints import face_points, onto_face
-from .pipeline import generic_detected_landmarks, load_generic
+from .pipeline import face_motion, generic_detected_landmarks, load_generic
 
 
 def face_joints(V, F, frame=None, names=("head",)):
@@ -59,5 +59,6 @@ def face_joints(V, F, frame=None, names=("head",)):
         return None, "the generic rig's own landmarks were not found"
     bones = list(generic.skeleton.names)
     calibrated = face_points(default_rig_path(), "detected") or {}
-    joints = onto_face(source, found, {n: calibrated.get(n, generic.skeleton.heads[bones.index(n)]) for n in names})
+    joints = onto_face(source, found, {n: calibrated.get(n, generic.skeleton.heads[bones.index(n)]) for n in names},
+                       face_motion(generic))
     return (None, "the landmarks found fit no human face") if joints is None else (joints, None)

@@ -36,12 +36,20 @@ JAW_CARRIED = ("menton", "pogonion", "labiale_inferius", "sublabiale")   # move 
 # warp places better (a human's proportions put a cat's head joint 0.84 ex-ex off, the warp 0.67). The
 # beast, a monster with a human face, measures 0.083 and takes a human's joints.
 HUMAN_FIT = 0.12
+# ex-ex: the same gate with the generic's face free to wear its expression space and open its jaw
+# (``pipeline.face_motion``; :func:`autobones.landmarks.human_face.face_distance` over the shared names). The
+# neutral residual grows with an expression as far as an ogre's: ICT identity000 with its jaw open 0.117
+# (refused by the face's own fit), surprised 0.106, against the ogre's 0.130. Wearing one: the shared humans,
+# neutral or expressive, 0.028-0.084 (0.088 with the expression left out of the space); the animals, toys
+# and robot 0.105 (the ogre) to 0.269; the beast 0.066 (a human face, as before). With the detector's
+# landmarks on both skins (``place`` on a face mask): humans 0.050-0.078, the stuffed toy 0.142
+HUMAN_FIT_EXPRESSIVE = 0.095
 FACE_JOINTS_FILE = "face_joints.json"   # in a rig's folder: where human faces put its joints
 FACE_JOINTS_FORMAT = "autobones-face-joints/1"
 
 
 def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, by_face=True,
-                  names=("head", "jaw"), calibrated=None):
+                  names=("head", "jaw"), calibrated=None, motion=None):
     """The carried ``head`` and ``jaw`` joints moved to where the generic's sit relative to the head's
     ear canals, or else to its human face, and onto the landmarks' midplane.
 
@@ -94,6 +102,9 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
         own joints when the face places them: the generic's, mapped by hand-placed face landmarks,
         sat 0.09-0.22 ex-ex from the occiput-C1 centre and 0.11-0.22 from the condyle on the shared
         human heads; calibrated on the heads of the other source families, 0.06-0.21 and 0.03-0.17.
+    motion : callable, optional
+        How the generic's face moves (:func:`autobones.rig_transfer.pipeline.face_motion`): a face
+        that fits the generic only wearing an expression (a smile, an open jaw) still places the joints.
 
     Returns
     -------
@@ -106,7 +117,7 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
 
     G = generic.landmarks if source is None else source
     from_ears = _from_the_ears(G, landmarks)
-    from_face = None if from_ears is not None or not by_face else face_similarity(G, landmarks)
+    from_face = None if from_ears is not None or not by_face else face_similarity(G, landmarks, motion)
     mapped = from_ears or from_face
     pairs = sum(1 for n in landmarks if n.endswith("_l") and mirror_name(n) in landmarks)
     plane = symmetry_plane(landmarks) if pairs >= MIN_PAIRS else None
@@ -139,40 +150,43 @@ def anchor_joints(skeleton, generic, landmarks, V, F, source=None, frame=None, b
     return Skeleton(bones, np.array(skeleton.parents).copy(), heads, tails), placed
 
 
-def face_similarity(G, landmarks):
+def face_similarity(G, landmarks, motion=None):
     """A map from a generic joint (3,) (the generic's frame) to where it goes on a human face by the
     landmarks' similarity (Umeyama 1991) from the generic's ``G`` (dict str -> (3,)) to ``landmarks``
-    (dict str -> (3,), the head's frame), or None: see :func:`face_fit`."""
-    fit = face_fit(G, landmarks)
+    (dict str -> (3,), the head's frame), or None: see :func:`face_fit` (``motion`` its gate's)."""
+    fit = face_fit(G, landmarks, motion)
     if fit is None:
         return None
     s, R, p0, q0 = fit
     return lambda joint: q0 + s * (R @ (np.asarray(joint, dtype=np.float64) - p0))
 
 
-def onto_face(G, landmarks, points):
+def onto_face(G, landmarks, points, motion=None):
     """``points`` (dict str -> (3,), the generic's frame) mapped onto a human face by the similarity of
     the generic's landmarks ``G`` to the face's ``landmarks`` (both dict str -> (3,)), then onto the
     landmarks' midplane (``landmarks.refine.symmetry_plane``); None where no similarity fits
-    (:func:`face_fit`)."""
+    (:func:`face_fit`, ``motion`` its gate's)."""
     from ..landmarks.refine import symmetry_plane
 
     shared = {n: np.asarray(p, dtype=np.float64) for n, p in landmarks.items() if n in G}
-    mapped = face_similarity(G, shared)
+    mapped = face_similarity(G, shared, motion)
     if mapped is None:
         return None
     plane = symmetry_plane(shared)
     return {k: onto_plane(mapped(p), *plane) for k, p in points.items()}
 
 
-def face_fit(G, landmarks):
+def face_fit(G, landmarks, motion=None):
     """The similarity ``x -> q0 + s R (x - p0)`` (scale, (3, 3), (3,), (3,)) from the generic's
     landmarks ``G`` (dict str -> (3,)) to a human face's ``landmarks`` (dict str -> (3,), the head's
     frame), or None: landmarks behind the face, fewer than ``MIN_FACE`` shared, or a face no
     similarity of the generic's fits (an animal's, a cartoon's).
 
     The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
-    animals' so); the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
+    animals' so): within ``HUMAN_FIT`` of the neutral generic's, or with ``motion``
+    (:func:`autobones.rig_transfer.pipeline.face_motion`) within ``HUMAN_FIT_EXPRESSIVE`` of the
+    generic wearing the expression that fits best (a smiling or open-mouthed face is a human's too);
+    the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
     are ``MIN_FACE`` of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them,
     0.08 without, and a neutral face's joints 0.00-0.02 either way."""
     from ..geometry.rotations import similarity
@@ -191,7 +205,14 @@ def face_fit(G, landmarks):
 
     s, R, p0, q0, residual = fit(shared)
     exex = s * float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
-    if not residual <= HUMAN_FIT * exex:
+    eyes = ("exocanthion_l", "exocanthion_r")
+    if motion is not None and all(n in landmarks for n in eyes):
+        from ..landmarks.human_face import face_distance
+
+        names = list(eyes) + [n for n in shared if n not in eyes]
+        if not face_distance(landmarks, G, motion(G, names), names=names) <= HUMAN_FIT_EXPRESSIVE:
+            return None
+    elif not residual <= HUMAN_FIT * exex:
         return None
     upper = [n for n in shared if n not in JAW_CARRIED]
     if len(upper) >= MIN_FACE:

@@ -167,6 +167,29 @@ def generic_expression_space(generic, rig=None):
     return space if space["basis"].shape[1:] == (len(generic.vertices), 3) else None
 
 
+def face_motion(generic, rig=None):
+    """How the generic rig's face moves, for the face gate of :func:`.joints.face_fit`: a function
+    ``(points, names) -> (k, len(names), 3)``, the displacement of ``points`` (dict str -> (3,) on the
+    generic's skin, its frame) under each shape of its expression space and its jaw's hinge
+    (:func:`autobones.landmarks.human_face.expression_displacements`, ``hinge_displacement``); None
+    when the rig (``generic``, loaded from ``rig``: a folder, None the built-in one) has no space."""
+    from ..landmarks.human_face import expression_displacements, hinge_displacement
+
+    space = generic_expression_space(generic, rig)
+    if space is None:
+        return None
+    jaw = generic_jaw_prior(generic, rig)
+
+    def motion(points, names):
+        skin = (points, generic.vertices, generic.faces)
+        D = [expression_displacements(*skin, space["basis"], names=names)]
+        if jaw is not None:
+            D.append(hinge_displacement(*skin, jaw, names=names))
+        return np.concatenate(D)
+
+    return motion
+
+
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
              symmetric="auto", expression_fit=True, aim_head=True, **fit_options):
     """Carry the generic rig onto a landmarked head.
@@ -266,7 +289,8 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     lap("correspond")
 
     under, skeleton, placed = _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
-                                          by_face=detected is None, calibrated=face_points(_rig_folder(rig), "given"))
+                                          by_face=detected is None, calibrated=face_points(_rig_folder(rig), "given"),
+                                          motion=face_motion(generic, rig) if detected is None else None)
     muscles = carry_muscles(generic.muscles, under, generic.vertices, generic.faces, P)
     lap("skeleton")
 
@@ -308,13 +332,14 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     return out
 
 
-def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True, calibrated=None):
+def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame, by_face=True, calibrated=None,
+                motion=None):
     """(under, skeleton, placed): the under-skin warp fitted on the correspondence ``P`` (n_rig, 3)
     where ``ok``, and the generic skeleton carried by it, its head and jaw then placed by the head's
     ears or face and its midplane (:func:`~.joints.anchor_joints`: ``placed`` says which; ``src`` and
     ``dst`` the shared landmarks on the generic and on the head; ``frame`` the head's, which tells a face
     mask; ``by_face`` False for automatic landmarks; ``calibrated`` where faces put the joints,
-    :func:`~.joints.face_points`)."""
+    :func:`~.joints.face_points`; ``motion`` how the generic's face moves, :func:`face_motion`)."""
     partners = symmetry.partners(generic.vertices, generic.faces)   # None unless the fit was symmetric
     under = under_skin_warp(generic.vertices, P, ok, control_points, partners=partners)
     skeleton = generic.skeleton.transformed(under.transform)
@@ -323,7 +348,7 @@ def _under_skin(generic, P, ok, control_points, symmetry, src, dst, V, F, frame,
     # where the head has tragions they say where the joints are, else a human face's landmarks, and its
     # landmark pairs where its midplane is
     skeleton, placed = anchor_joints(skeleton, generic, dst, V, F, source=src, frame=frame, by_face=by_face,
-                                     calibrated=calibrated)
+                                     calibrated=calibrated, motion=motion)
     return under, skeleton, placed
 
 
