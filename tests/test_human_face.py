@@ -9,15 +9,22 @@ from shared_data import ROOT, data
 from autobones.arkit.shapes import load_shapes
 from autobones.geometry.closest import closest_points
 from autobones.io.landmarks import read_landmarks
-from autobones.landmarks.assist import _reference_motion, generic_skin
-from autobones.landmarks.human_face import (FIVE, HUMAN_FACE, HUMAN_FACE_EXPRESSIVE, face_distance,
-                                            is_human_face)
+from autobones.landmarks.assist import generic_skin
+from autobones.landmarks.human_face import (FIVE, HUMAN_FACE, HUMAN_FACE_EXPRESSIVE, expression_displacements,
+                                            face_distance, hinge_displacement, is_human_face)
+from autobones.rig_transfer.pipeline import face_motion, generic_expression_space
 
 
 @pytest.fixture(scope="module")
 def reference():
-    generic = generic_skin()[0]
-    expressions, hinge = _reference_motion(generic, None)
+    """(generic rig, its expression space at the five (k, 5, 3), its jaw's hinge there (1, 5, 3))."""
+    generic, jaw = generic_skin()
+    skin = (generic.landmarks, generic.vertices, generic.faces)
+    expressions = expression_displacements(*skin, generic_expression_space(generic)["basis"])
+    hinge = hinge_displacement(*skin, jaw)
+    # what assist and transfer use: the two together (rig_transfer.pipeline.face_motion)
+    np.testing.assert_allclose(face_motion(generic)(generic.landmarks, FIVE), np.concatenate([expressions, hinge]),
+                               atol=1e-12)
     return generic, expressions, hinge
 
 
@@ -59,21 +66,20 @@ def test_a_person_wearing_an_expression_is_a_human_face(reference, expression):
     generic, expressions, hinge = reference
     five = _person(EXPRESSIONS[expression])
     assert face_distance(five, generic.landmarks, np.concatenate([expressions, hinge])) < 0.6 * HUMAN_FACE_EXPRESSIVE
-    assert is_human_face(five, generic.landmarks, expressions, hinge)
-    assert is_human_face(_person({}), generic.landmarks, expressions, hinge)
+    both = np.concatenate([expressions, hinge])
+    assert is_human_face(five, generic.landmarks, both)
+    assert is_human_face(_person({}), generic.landmarks, both)
 
 
 def test_an_open_jaw_left_out_of_the_space_is_still_human_by_the_hinge(reference):
     # leave-one-expression-out: the space without its jawOpen (ICT's) does not reach an open mouth,
     # the jaw's hinge (an articulation of the generic, not a learned shape) does
     generic, expressions, hinge = reference
-    from autobones.rig_transfer.pipeline import generic_expression_space
-
     names = generic_expression_space(generic)["names"]
     keep = [i for i, n in enumerate(names) if n != "jawOpen"]
     five = _person(EXPRESSIONS["open jaw"])
     assert face_distance(five, generic.landmarks, expressions[keep]) > HUMAN_FACE_EXPRESSIVE
-    assert is_human_face(five, generic.landmarks, expressions[keep], hinge)
+    assert is_human_face(five, generic.landmarks, np.concatenate([expressions[keep], hinge]))
     assert face_distance(five, generic.landmarks) > HUMAN_FACE   # and the neutral generic alone missed it
 
 
@@ -83,8 +89,8 @@ def test_animals_and_cartoons_are_not_human_faces_even_with_expressions(referenc
     # space and the hinge; these three 0.075-0.119
     generic, expressions, hinge = reference
     lm = read_landmarks(ROOT / "tests" / "landmarks" / f"{animal}.landmarks.json")
-    assert not is_human_face(lm, generic.landmarks, expressions, hinge)
-    assert not is_human_face(lm, generic.landmarks, None, hinge)
+    assert not is_human_face(lm, generic.landmarks, np.concatenate([expressions, hinge]))
+    assert not is_human_face(lm, generic.landmarks, expressions)
     assert not is_human_face(lm, generic.landmarks)
 
 

@@ -44,7 +44,7 @@ from ..io.landmark_checks import validate_landmarks
 from ..io.landmark_names import NAMES
 from ..orient import Frame, frame_from_landmarks
 from ..rig_transfer.under_skin import ride
-from .human_face import expression_displacements, hinge_displacement, is_human_face
+from .human_face import FIVE, is_human_face
 from .refine import on_profile, symmetry_plane
 
 #: The names an assisted placement needs: well spread over the face, easy to click on any head.
@@ -280,7 +280,7 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         points.update(zip(wanted, found))
         conf.update(zip(wanted, map(float, c)))
     human = all(n in generic.landmarks for n in REQUIRED) and is_human_face(
-        given, generic.landmarks, *_reference_motion(generic, rig))
+        given, generic.landmarks, _reference_motion(generic, rig))
     if human and "menton" in points and "menton" not in given:
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
@@ -298,15 +298,12 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
 
 
 def _reference_motion(generic, rig):
-    """How the generic's expression space and its jaw's hinge move the five names: ((k, 5, 3) or
-    None without a space, (1, 5, 3) or None without ``jaw`` and ``head`` bones)."""
-    from ..rig_transfer.pipeline import generic_expression_space
+    """How the generic's expression space and its jaw's hinge move the five names, (k, 5, 3), or None
+    when the rig has no expression space (:func:`autobones.rig_transfer.pipeline.face_motion`)."""
+    from ..rig_transfer.pipeline import face_motion
 
-    space = generic_expression_space(generic, rig)
-    jaw = generic_skin(rig)[1]   # a folder's is memoised; a rig object's is computed again
-    skin = (generic.landmarks, generic.vertices, generic.faces)
-    return (None if space is None else expression_displacements(*skin, space["basis"]),
-            None if jaw is None else hinge_displacement(*skin, jaw))
+    motion = face_motion(generic, rig)
+    return None if motion is None else motion(generic.landmarks, FIVE)
 
 
 def _detect(V, F):
