@@ -14,7 +14,8 @@ from shared_data import ROOT, data
 from autobones.errors import AutobonesError
 from autobones.io.landmarks import NAMES, read_landmarks, write_landmarks
 from autobones.io.mesh import load_mesh
-from autobones.landmarks.assist import REQUIRED, assist_landmarks, confidence, read_off, with_detected
+from autobones.landmarks.assist import (REQUIRED, assist_landmarks, confidence, detection_agrees, read_off,
+                                       with_detected)
 
 
 def _head(rel):
@@ -64,6 +65,9 @@ def test_detected_names_replace_the_fits_on_a_human_face(identity000):
     # names the detector lacks keep the fit's proposal
     for n in set(out.points) - set(detected):
         np.testing.assert_array_equal(out.points[n], fit_only.points[n])
+    # and the result says which came from where
+    assert out.human and fit_only.human and fit_only.detected == ()
+    assert set(out.detected) == set(detected) - set(REQUIRED) and len(out.detected) >= 15
 
 
 def test_a_detection_that_disagrees_with_the_given_names_is_not_used():
@@ -80,6 +84,8 @@ def test_a_detection_that_disagrees_with_the_given_names_is_not_used():
     far = {**{n: p + 0.5 for n, p in given.items()}, "nasion": np.array([0.0, 0.1, 0.0])}
     assert with_detected(points, conf, given, far, unit=2.0) == (points, conf)
     assert with_detected(points, conf, given, None, unit=2.0) == (points, conf)
+    assert detection_agrees(given, close, 2.0) and not detection_agrees(given, far, 2.0)
+    assert not detection_agrees(given, None, 2.0) and not detection_agrees(given, {"nasion": np.zeros(3)}, 2.0)
 
 
 def test_the_generic_rigs_own_landmarks_read_off_are_within_the_measured_bound():
@@ -147,6 +153,7 @@ def test_an_animal_gets_proposals_too():
     # its ears and skull are far from a human's: the proposals there are offered at a low confidence
     assert min(out.confidence.values()) < 0.2
     assert all(np.isfinite(p).all() for p in out.points.values())
+    assert not out.human and out.detected == ()     # a cow's five are no person's: the fit alone
 
 
 @pytest.mark.parametrize("change, words", [
@@ -195,6 +202,8 @@ def test_cli_assist_writes_every_name_with_confidence(tmp_path):
     r = _run(["landmarks", str(data("menpo3d/james.obj")), "--assist", "five.json", "-o", "out.json"], tmp_path)
     assert r.returncode == 0, r.stderr
     assert "5 given" in r.stdout
+    # james is a person: the line says where the names came from (the detector where it agrees)
+    assert "a person's face" in r.stdout and "from the automatic detector" in r.stdout, r.stdout
     written = json.loads((tmp_path / "out.json").read_text())
     got = read_landmarks(tmp_path / "out.json")
     assert len(got) >= 40 and set(written["confidence"]) == set(got)

@@ -80,6 +80,11 @@ class Assisted:
         The head's frame from the landmarks (:func:`autobones.orient.frame_from_landmarks`).
     unit : float
         The given ex-ex distance, mesh units (the unit of the confidence's distances).
+    human : bool
+        Whether the given five are a person's face (:func:`autobones.landmarks.human_face.is_human_face`):
+        the chin's profile rule and the detector apply only then.
+    detected : tuple of str
+        The proposed names taken from the automatic detector (empty: all from the generic's fit).
     """
 
     points: dict
@@ -87,6 +92,8 @@ class Assisted:
     omitted: dict = field(default_factory=dict)
     frame: Frame | None = None
     unit: float = 1.0
+    human: bool = False
+    detected: tuple = ()
 
 
 def check_given(given):
@@ -285,16 +292,19 @@ def assist_landmarks(vertices, faces, given, rig=None, reading=None, detected=No
         # the fit leaves a human chin's lowest point 2-16 % of ex-ex off (its chin is not the head's);
         # the midline profile has it exactly (not on an animal: its "down" is not the face's)
         points = on_profile(V, F, points, *symmetry_plane(points), unit, names=("menton",))
+    taken = ()
     if human and detected is not None:
         if isinstance(detected, str) and detected == "auto":
             found = _detect(V, F)
         else:
             found = detected() if callable(detected) else detected
         points, conf = with_detected(points, conf, given, found, unit)
+        if detection_agrees(given, found, unit):
+            taken = tuple(n for n in NAMES if n in found and n in points and n not in given)
     order = {n: i for i, n in enumerate(NAMES)}
     points = {n: points[n] for n in sorted(points, key=order.get)}
     return Assisted(points=points, confidence={n: conf[n] for n in points}, omitted=omitted,
-                    frame=frame_from_landmarks(V, F, points), unit=unit)
+                    frame=frame_from_landmarks(V, F, points), unit=unit, human=bool(human), detected=taken)
 
 
 def _reference_motion(generic, rig):
@@ -318,14 +328,10 @@ def _detect(V, F):
 
 def with_detected(points, confidence, given, detected, unit):
     """``points`` / ``confidence`` (name -> (3,) / float) with the names ``detected`` has (and
-    ``given`` has not) taken from it, when its version of the given names agrees with them (RMS
-    distance at most :data:`DETECTED_AGREE` ex-ex, ``unit`` the ex-ex in mesh units); else unchanged.
-    A detected name's confidence is the detector's (``detected.confidence``), else 1."""
-    if not detected:
-        return points, confidence
-    shared = [n for n in given if n in detected]
-    if not shared or np.sqrt(np.mean([np.sum((np.asarray(detected[n], dtype=np.float64) - given[n]) ** 2)
-                                      for n in shared])) > DETECTED_AGREE * unit:
+    ``given`` has not) taken from it, when its version of the given names agrees with them
+    (:func:`detection_agrees`); else unchanged. A detected name's confidence is the detector's
+    (``detected.confidence``), else 1."""
+    if not detection_agrees(given, detected, unit):
         return points, confidence
     scores = getattr(detected, "confidence", {}) or {}
     points, confidence = dict(points), dict(confidence)
@@ -334,6 +340,14 @@ def with_detected(points, confidence, given, detected, unit):
             points[n] = np.asarray(detected[n], dtype=np.float64)
             confidence[n] = float(scores.get(n, 1.0))
     return points, confidence
+
+
+def detection_agrees(given, detected, unit):
+    """True when ``detected`` (name -> (3,), or None) has names of ``given`` and lies within
+    :data:`DETECTED_AGREE` ex-ex of them (RMS; ``unit`` the ex-ex in mesh units): the same face, read well."""
+    shared = [n for n in given if n in (detected or {})]
+    return bool(shared) and np.sqrt(np.mean([np.sum((np.asarray(detected[n], dtype=np.float64) - given[n]) ** 2)
+                                             for n in shared])) <= DETECTED_AGREE * unit
 
 
 def _read_names(fit, V, F, where, given, unit):
@@ -359,5 +373,5 @@ def _unit_rows(A):
     return A / np.where(n > 0, n, 1.0)
 
 
-__all__ = ["Assisted", "GenericFit", "REQUIRED", "assist_landmarks", "check_given", "confidence", "fit_generic",
-           "generic_skin", "read_off"]
+__all__ = ["Assisted", "GenericFit", "REQUIRED", "assist_landmarks", "check_given", "confidence", "detection_agrees",
+           "fit_generic", "generic_skin", "read_off"]
