@@ -67,12 +67,25 @@ def _normalised(X):
 
 
 def _on_skin(reference, vertices, faces, names):
-    """The names' triangles on the generic skin and their barycentric coordinates: (face (k,) int,
-    bary (k, 3) float, F (m, 3) int64)."""
+    """Where the names sit on the generic skin: (points (k, 3), face (k,) int, bary (k, 3) float,
+    F (m, 3) int64), each name's nearest triangle and its barycentric coordinates there."""
     B0 = np.array([reference[n] for n in names], dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     _, face, bary, _ = closest_points(B0, np.asarray(vertices, dtype=np.float64), F)
-    return face, bary, F
+    return B0, face, bary, F
+
+
+def _expression_fields(on_skin, basis):
+    _, face, bary, F = on_skin
+    return np.einsum("pj,kpjc->kpc", bary, np.asarray(basis, dtype=np.float64)[:, F[face]])
+
+
+def _hinge_field(on_skin, jaw, degrees):
+    from ..rig_transfer.jaw_prior import open_jaw
+
+    B0, face, bary, F = on_skin
+    weight = np.einsum("pj,pj->p", bary, np.asarray(jaw["weight"], dtype=np.float64)[F[face]])
+    return (open_jaw(B0, weight, jaw["pivot"], jaw["axis"], degrees, jaw.get("glide")) - B0)[None]
 
 
 def expression_displacements(reference, vertices, faces, basis, names=FIVE):
@@ -93,8 +106,7 @@ def expression_displacements(reference, vertices, faces, basis, names=FIVE):
     -------
     (k, len(names), 3) float64: each name's displacement at its barycentric point in its nearest triangle.
     """
-    face, bary, F = _on_skin(reference, vertices, faces, names)
-    return np.einsum("pj,kpjc->kpc", bary, np.asarray(basis, dtype=np.float64)[:, F[face]])
+    return _expression_fields(_on_skin(reference, vertices, faces, names), basis)
 
 
 def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG, names=FIVE):
@@ -105,12 +117,18 @@ def hinge_displacement(reference, vertices, faces, jaw, degrees=HINGE_DEG, names
     degree), read at the names' barycentric points. An articulation, not a learned shape: it covers
     an open mouth whatever expression space the rig carries (left out of ICT's, an open jaw's
     distance falls from 0.069-0.074 to 0.025-0.031 with it)."""
-    from ..rig_transfer.jaw_prior import open_jaw
+    return _hinge_field(_on_skin(reference, vertices, faces, names), jaw, degrees)
 
-    face, bary, F = _on_skin(reference, vertices, faces, names)
-    B0 = np.array([reference[n] for n in names], dtype=np.float64)
-    weight = np.einsum("pj,pj->p", bary, np.asarray(jaw["weight"], dtype=np.float64)[F[face]])
-    return (open_jaw(B0, weight, jaw["pivot"], jaw["axis"], degrees, jaw.get("glide")) - B0)[None]
+
+def face_motion_fields(reference, vertices, faces, basis, jaw=None, names=FIVE):
+    """Both at once, the names found on the skin once: :func:`expression_displacements` then, with a
+    ``jaw`` prior, :func:`hinge_displacement` (at :data:`HINGE_DEG`): (k [+ 1], len(names), 3) float64,
+    what :func:`face_distance` and :func:`is_human_face` take as the face's motion."""
+    on_skin = _on_skin(reference, vertices, faces, names)
+    fields = [_expression_fields(on_skin, basis)]
+    if jaw is not None:
+        fields.append(_hinge_field(on_skin, jaw, HINGE_DEG))
+    return np.concatenate(fields)
 
 
 def face_distance(given, reference, displacements=None, ridge=RIDGE, rounds=ROUNDS, names=FIVE):
@@ -164,4 +182,4 @@ def is_human_face(given, reference, motion=None):
 
 
 __all__ = ["FIVE", "HINGE_DEG", "HUMAN_FACE", "HUMAN_FACE_EXPRESSIVE", "RIDGE", "expression_displacements",
-           "face_distance", "hinge_displacement", "is_human_face"]
+           "face_distance", "face_motion_fields", "hinge_displacement", "is_human_face"]

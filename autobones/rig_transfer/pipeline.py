@@ -168,26 +168,19 @@ def generic_expression_space(generic, rig=None):
 
 
 def face_motion(generic, rig=None):
-    """How the generic rig's face moves, for the face gate of :func:`.joints.face_fit`: a function
-    ``(points, names) -> (k, len(names), 3)``, the displacement of ``points`` (dict str -> (3,) on the
-    generic's skin, its frame) under each shape of its expression space and its jaw's hinge
-    (:func:`autobones.landmarks.human_face.expression_displacements`, ``hinge_displacement``); None
-    when the rig (``generic``, loaded from ``rig``: a folder, None the built-in one) has no space."""
-    from ..landmarks.human_face import expression_displacements, hinge_displacement
+    """How the generic rig's face moves, for the face gates (:func:`.joints.face_fit`,
+    ``landmarks --assist``): a function ``(points, names) -> (k, len(names), 3)``, the displacement of
+    ``points`` (dict str -> (3,) on the generic's skin, its frame) under each shape of its expression
+    space and its jaw's hinge (:func:`autobones.landmarks.human_face.face_motion_fields`); None when
+    the rig (``generic``, loaded from ``rig``: a folder, None the built-in one) has no space."""
+    from ..landmarks.human_face import face_motion_fields
 
     space = generic_expression_space(generic, rig)
     if space is None:
         return None
     jaw = generic_jaw_prior(generic, rig)
-
-    def motion(points, names):
-        skin = (points, generic.vertices, generic.faces)
-        D = [expression_displacements(*skin, space["basis"], names=names)]
-        if jaw is not None:
-            D.append(hinge_displacement(*skin, jaw, names=names))
-        return np.concatenate(D)
-
-    return motion
+    return lambda points, names: face_motion_fields(points, generic.vertices, generic.faces, space["basis"],
+                                                    jaw, names)
 
 
 def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points=400, details=None, arkit=False,
