@@ -191,6 +191,15 @@ def cmd_pose(args):
     return 0
 
 
+def _assist_source(found):
+    """Where ``--assist``'s proposals came from (an ``Assisted``), for its one line."""
+    if found.detected:
+        return f"a person's face: {len(found.detected)} from the automatic detector, the rest from the generic head's fit"
+    if found.human:
+        return "a person's face, no automatic landmarks agreeing with yours: all from the generic head's fit"
+    return "not a person's face: all from the generic head's fit"
+
+
 def cmd_landmarks(args):
     if args.edit:
         return _edit_landmarks(args)
@@ -227,11 +236,7 @@ def cmd_landmarks(args):
         lm, frame, confidence = found.points, found.frame, found.confidence
         proposed = [n for n in lm if n not in given]
         how = (f"from {args.assist} ({len(given)} given), {len(proposed)} proposed, mean confidence "
-               f"{sum(confidence[n] for n in proposed) / max(len(proposed), 1):.2f}; "
-               + (f"a person's face: {len(found.detected)} from the automatic detector, the rest from the generic "
-                  "head's fit" if found.detected else
-                  "a person's face, no automatic landmarks agreeing with yours: all from the generic head's fit"
-                  if found.human else "not a person's face: all from the generic head's fit"))
+               f"{sum(confidence[n] for n in proposed) / max(len(proposed), 1):.2f}; {_assist_source(found)}")
         if found.omitted:
             how += "; omitted " + ", ".join(sorted(found.omitted))
         watch.lap("assist")
