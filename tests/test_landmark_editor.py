@@ -216,19 +216,25 @@ def test_proposals_on_a_persons_face_are_landmarks_assists_own(tmp_path):
     write_landmarks(str(tmp_path / "five.landmarks.json"), five)
     sess = open_session(str(data(LEE)), output=str(tmp_path / "o.json"), source=str(tmp_path / "five.landmarks.json"))
     assert sess.detection is None                        # started from the file: nothing detected yet
-    got = sess.assist(_lists(five))["points"]
-    cli = assist_landmarks(sess.V, sess.F, five, detected="auto").points
+    out = sess.assist(_lists(five))
+    got = out["points"]
+    assisted = assist_landmarks(sess.V, sess.F, five, detected="auto")
+    cli = assisted.points
     fit = assist_landmarks(sess.V, sess.F, five).points
     assert set(got) == set(cli) - set(five)
     for n in got:
         np.testing.assert_allclose(got[n], cli[n], atol=1e-9, err_msg=n)
     moved = [n for n in got if np.linalg.norm(cli[n] - fit[n]) > 1e-6]
     assert len(moved) >= 10, moved                       # the detector's names replaced the fit's
+    # the page is told which: every name the detector moved is listed as its, and only proposed names
+    assert set(moved) <= set(out["detected"]) == set(assisted.detected) - set(five), (moved, out["detected"])
     assert sess.detection                                # kept for the next proposal
     blind = open_session(str(data(LEE)), output=str(tmp_path / "o.json"), source=str(tmp_path / "five.landmarks.json"),
                          detect=False)
-    for n, p in blind.assist(_lists(five))["points"].items():
+    out = blind.assist(_lists(five))
+    for n, p in out["points"].items():
         np.testing.assert_allclose(p, fit[n], atol=1e-9, err_msg=n)
+    assert out["detected"] == []
     assert blind.detection is None
     assert sorted(os.listdir(tmp_path)) == ["five.landmarks.json"]
 
@@ -450,7 +456,8 @@ def test_browser_proposes_the_rest_and_closing_without_save_leaves_no_file(brows
         proposed = {n for n, m in state.items() if m["kind"] == "assist"}
         assert len(proposed) >= 20 and all(0 <= state[n]["conf"] <= 1 for n in proposed), state
         n = sorted(proposed)[0]
-        assert "proposed (confidence" in page.inner_text(f'.lm[data-name="{n}"] .state')
+        assert "proposed by the fit (confidence" in page.inner_text(f'.lm[data-name="{n}"] .state')
+        assert "by the generic head's fit" in page.inner_text("#note")
         page.click(f'.lm[data-name="{n}"] button.accept')
         _settle(page)
         assert page.evaluate(f"{HOOK}.state()")[n]["kind"] == "placed"
@@ -464,3 +471,29 @@ def test_browser_proposes_the_rest_and_closing_without_save_leaves_no_file(brows
     finally:
         s.close()
     assert os.listdir(tmp_path) == []
+
+
+def test_browser_says_which_proposals_the_face_detector_made(browser, tmp_path):
+    # on a person's face the proposals mix the detector's points and the fit's: each row says which
+    from autobones.io.landmarks import write_landmarks
+    from autobones.landmarks.assist import REQUIRED
+
+    five = {n: p for n, p in read_landmarks(LEE_MARKS).items() if n in REQUIRED}
+    write_landmarks(str(tmp_path / "five.landmarks.json"), five)
+    sess = open_session(str(data(LEE)), output=str(tmp_path / "o.json"), source=str(tmp_path / "five.landmarks.json"))
+    s = Serving(sess)
+    try:
+        page, errors = _open(browser, s.server.url)
+        _settle(page)
+        state = page.evaluate(f"{HOOK}.state()")
+        by = {n: m.get("by") for n, m in state.items() if m["kind"] == "assist"}
+        detected = {n for n, b in by.items() if b == "detector"}
+        assert len(detected) >= 10 and len(by) - len(detected) >= 5, by   # both sources on a face
+        d, f = sorted(detected)[0], sorted(set(by) - detected)[0]
+        assert "proposed by the face detector (confidence" in page.inner_text(f'.lm[data-name="{d}"] .state')
+        assert "proposed by the fit (confidence" in page.inner_text(f'.lm[data-name="{f}"] .state')
+        assert f"{len(detected)} by the face detector" in page.inner_text("#note") and not errors, errors
+        page.close()
+    finally:
+        s.close()
+    assert sorted(os.listdir(tmp_path)) == ["five.landmarks.json"]

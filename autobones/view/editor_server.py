@@ -16,7 +16,7 @@ GET  ``/api/mesh``              :meth:`EditSession.mesh_bytes` (float32 position
 GET  ``/api/picture?name=N``    PNG: where N goes on the generic head (:mod:`~autobones.view.landmark_pictures`)
 POST ``/api/check``             ``{"landmarks"}`` -> :meth:`EditSession.problems`
 POST ``/api/mirror``            ``{"name", "point"}`` -> ``{"name", "point"}``: the partner's proposal
-POST ``/api/assist``            ``{"landmarks"}`` -> ``{"points", "confidence"}`` for the names not placed
+POST ``/api/assist``            ``{"landmarks"}`` -> ``{"points", "confidence", "detected"}`` for the names not placed
 POST ``/api/save``              ``{"landmarks"}`` -> ``{"written": [paths]}``
 POST ``/api/done``              ``{}``: the server stops after answering
 """

@@ -124,7 +124,9 @@ class EditSession:
         return partner, closest_on_surface(self.frame.from_canonical(c), self.V, self.F)[0]
 
     def assist(self, landmarks):
-        """The assisted proposal for every name not placed: ``{"points": {...}, "confidence": {...}}``."""
+        """The assisted proposal for every name not placed: ``{"points", "confidence", "detected"}``.
+
+        ``detected`` lists the proposed names taken from the automatic detector (the rest: the fit's)."""
         lm = self.parse(landmarks)
         missing = [n for n in ASSIST_NEEDS if n not in lm]
         if missing:
@@ -139,7 +141,9 @@ class EditSession:
         points = {n: [float(c) for c in np.asarray(p, dtype=np.float64).reshape(3)]
                   for n, p in got.points.items() if n in NAMES and n not in lm}
         conf = {n: round(float(got.confidence.get(n, 0.0)), 3) for n in points}
-        return {"points": points, "confidence": conf}
+        # the page says where each proposal came from: a detector's point and a fitted one deserve
+        # different trust (the detector's are measured on people's faces, the fit's on every family)
+        return {"points": points, "confidence": conf, "detected": sorted(set(got.detected) & set(points))}
 
     def _detected(self):
         """The head's automatic landmarks (None: none found or the detector not installed), found once."""

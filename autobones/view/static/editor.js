@@ -42,7 +42,8 @@ function setStatus(text) { $('#status').textContent = text; }
 
 // ---------------------------------------------------------------- the landmarks and their history
 
-// name -> { p: [x, y, z] (mesh frame), kind: 'placed' | 'mirror' | 'assist', conf: number | null }
+// name -> { p: [x, y, z] (mesh frame), kind: 'placed' | 'mirror' | 'assist', conf: number | null,
+//          by: 'detector' | 'fit' (an assisted proposal's source) }
 // 'mirror' and 'assist' are proposals: drawn hollow, not checked or saved until accepted (moved or accepted)
 let marks = new Map();
 const undoStack = [], redoStack = [];
@@ -127,11 +128,17 @@ async function proposeRest() {
   assistOffered = true;
   try {
     const out = await call('api/assist', { landmarks: accepted() });
-    let added = 0;
+    const detected = new Set(out.detected || []);
+    let added = 0, found = 0;
     for (const [n, p] of Object.entries(out.points)) {
-      if (!marks.has(n) || marks.get(n).kind !== 'placed') { marks.set(n, { p, kind: 'assist', conf: out.confidence[n] ?? null }); added++; }
+      if (!marks.has(n) || marks.get(n).kind !== 'placed') {
+        const by = detected.has(n) ? 'detector' : 'fit';
+        marks.set(n, { p, kind: 'assist', conf: out.confidence[n] ?? null, by });
+        added++; found += by === 'detector';
+      }
     }
-    if (added) $('#note').textContent = `${added} names proposed from those placed: hollow until accepted or moved`;
+    const source = found ? ` (${found} by the face detector, the rest by the generic head's fit)` : ' by the generic head\'s fit';
+    if (added) $('#note').textContent = `${added} names proposed${source}: hollow until accepted or moved`;
     refresh();
   } catch (err) { $('#note').textContent = `no proposals: ${err.message}`; }
 }
@@ -198,7 +205,8 @@ function updateList() {
     const m = marks.get(n);
     const conf = m && m.conf !== null && m.conf !== undefined ? ` (confidence ${m.conf.toFixed(2)})` : '';
     r.state.textContent = !m ? 'not placed' : m.kind === 'placed' ? 'placed' + conf
-      : (m.kind === 'mirror' ? 'proposed by symmetry' : 'proposed') + conf;
+      : (m.kind === 'mirror' ? 'proposed by symmetry' : m.by === 'detector' ? 'proposed by the face detector'
+        : 'proposed by the fit') + conf;
     r.accept.hidden = !m || m.kind === 'placed';
     const probs = (m && m.kind === 'placed' && problems.names[n]) || [];
     r.problem.textContent = probs.join('; ');
