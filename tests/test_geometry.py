@@ -7,7 +7,7 @@ from autobones.errors import AutobonesError
 from autobones.geometry import laplacian as lap
 from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
-from autobones.geometry.rotations import polar_rotations, rotate_between, similarity
+from autobones.geometry.rotations import polar_rotations, rotate_between, similarity, weighted_mean
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
                                          weld_by_size, without_large_parts)
@@ -188,6 +188,25 @@ def test_similarity_recovers_a_scaled_turned_point_set_and_never_mirrors():
     assert abs(s - 2.5) < 1e-12 and np.abs(R - R0).max() < 1e-12
     s, R = similarity(P, P * [-1.0, 1.0, 1.0])        # a mirror image: the best proper rotation
     assert np.linalg.det(R) > 0
+
+
+def test_weighted_similarity_follows_the_weighted_points():
+    # points weighted 0 (a smile's mouth corners) do not pull the map; the centre is the weighted mean
+    rng = np.random.default_rng(5)
+    P = rng.standard_normal((12, 3))
+    R0 = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    R0 *= np.sign(np.linalg.det(R0))
+    Q = 0.7 * P @ R0.T + [4.0, 0.0, -1.0]
+    Q[:3] += rng.standard_normal((3, 3))                 # three points moved off the map
+    w = np.r_[np.zeros(3), rng.uniform(0.5, 2.0, 9)]
+    s, R = similarity(P, Q, w)
+    assert abs(s - 0.7) < 1e-12 and np.abs(R - R0).max() < 1e-12
+    p0, q0 = weighted_mean(P, w), weighted_mean(Q, w)
+    np.testing.assert_allclose(q0 + s * (P[3:] - p0) @ R.T, Q[3:], atol=1e-12)
+    s1, R1 = similarity(P, Q)                            # unweighted: the moved points pull it off
+    assert abs(s1 - 0.7) > 1e-3
+    s2, R2 = similarity(P, Q, np.ones(12) * 3.0)         # equal weights: the unweighted map
+    assert abs(s2 - s1) < 1e-12 and np.abs(R2 - R1).max() < 1e-12
 
 
 def test_polar_rotations_are_the_nearest_proper_rotations():

@@ -10,8 +10,9 @@ from autobones.arkit.shapes import load_shapes
 from autobones.geometry.closest import closest_points
 from autobones.io.landmarks import read_landmarks
 from autobones.landmarks.assist import generic_skin
-from autobones.landmarks.human_face import (FIVE, HUMAN_FACE, HUMAN_FACE_EXPRESSIVE, expression_displacements,
-                                            face_distance, hinge_displacement, is_human_face)
+from autobones.landmarks.human_face import (FIVE, HUMAN_FACE, HUMAN_FACE_EXPRESSIVE, PLACEMENT,
+                                            expression_displacements, face_distance, hinge_displacement,
+                                            is_human_face, stillness)
 from autobones.rig_transfer.pipeline import face_motion, generic_expression_space
 
 
@@ -102,3 +103,20 @@ def test_the_neutral_gate_tells_a_neutral_person_from_a_cow():
     human = face_distance(read_landmarks(data("ict/identity000.landmarks.json")), generic)
     cow = face_distance(read_landmarks(ROOT / "tests" / "landmarks" / "cowHead.landmarks.json"), generic)
     assert human < HUMAN_FACE < cow
+
+
+def test_stillness_weighs_the_eye_corners_over_the_mouth_and_chin(reference):
+    # the generic's expressions and hinge move the mouth corners and chin far more than the eye corners,
+    # nasion and zygia: those weigh most in the face's pose (joints.face_fit); every weight is positive
+    # and at most 1 / PLACEMENT^2, and the weights do not depend on the unit the face is in
+    generic = reference[0]
+    names = ["exocanthion_l", "exocanthion_r", "endocanthion_l", "nasion", "zygion_l", "pronasale",
+             "cheilion_l", "cheilion_r", "menton", "pogonion"]
+    D = face_motion(generic)(generic.landmarks, names)
+    exex = float(np.linalg.norm(generic.landmarks["exocanthion_l"] - generic.landmarks["exocanthion_r"]))
+    w = dict(zip(names, stillness(D, exex)))
+    assert all(0 < v <= 1 / PLACEMENT ** 2 for v in w.values())
+    still = min(w[n] for n in ("exocanthion_l", "exocanthion_r", "endocanthion_l", "nasion", "zygion_l"))
+    assert still > 4 * max(w[n] for n in ("cheilion_l", "cheilion_r")) > 4 * max(w["menton"], w["pogonion"])
+    np.testing.assert_allclose(stillness(1000.0 * D, 1000.0 * exex), list(w.values()), rtol=1e-12)
+

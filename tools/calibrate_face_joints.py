@@ -64,12 +64,13 @@ def head_copies(name, mesh, lm):
             "given": given, "cuts": cuts}
 
 
-def pulled_back(G, face, truth):
+def pulled_back(G, face, truth, motion):
     """The head's anatomical joints ``truth`` carried into the generic's frame by the inverse of the
-    face's similarity from ``G`` (dict joint -> (3,)), or None where the face fits no human's."""
+    face's similarity from ``G`` (dict joint -> (3,)), or None where the face fits no human's; ``motion``
+    the generic's face's (``pipeline.face_motion``), as ``transfer`` and ``place`` fit it."""
     from autobones.rig_transfer.joints import face_fit
 
-    fit = face_fit(G, {n: p for n, p in face.items() if n in G})
+    fit = face_fit(G, {n: p for n, p in face.items() if n in G}, motion)
     if fit is None:
         return None
     s, R, p0, q0 = fit
@@ -87,21 +88,21 @@ def calibrated(samples, G):
                                   axis=0), *plane) for j in JOINTS}
 
 
-def placed(G, face, point):
+def placed(G, face, point, motion):
     """``point`` (3,) of the generic's frame mapped onto a face by its landmarks, on their midplane."""
     from autobones.rig_transfer.joints import onto_face
 
-    on = onto_face(G, face, {"p": point})
+    on = onto_face(G, face, {"p": point}, motion)
     return None if on is None else on["p"]
 
 
-def compare(kind, G, own, heads, faces):
+def compare(kind, G, own, heads, faces, motion):
     """Rows of (head, family, copy, joint, own, held out, front / up / left) and the two error lists per
     joint; ``faces(head)`` gives [(copy, face landmarks or None)]; each head's own samples are its as-is face."""
     samples = {}
     for name, h in heads.items():
         face = faces(h)[0][1]
-        back = None if face is None else pulled_back(G, face, h["truth"])
+        back = None if face is None else pulled_back(G, face, h["truth"], motion)
         if back is not None:
             samples[name] = (h["family"], back)
     rows, errors = [], {j: ([], []) for j in JOINTS}
@@ -109,11 +110,11 @@ def compare(kind, G, own, heads, faces):
         held = calibrated([s for s in samples.values() if s[0] != h["family"]], G)
         for cut, face in faces(h):
             for j in JOINTS:
-                a = None if face is None else placed(G, face, own[j])
+                a = None if face is None else placed(G, face, own[j], motion)
                 if a is None:
                     rows.append((name, h["family"], cut, j, "no human face", "-", "-"))
                     continue
-                b = placed(G, face, held[j])
+                b = placed(G, face, held[j], motion)
                 e = (b - h["truth"][j]) / h["u"]
                 errors[j][0].append(np.linalg.norm(a - h["truth"][j]) / h["u"])
                 errors[j][1].append(np.linalg.norm(e))
@@ -147,7 +148,7 @@ def main(argv=None):
     from autobones.generic_rig import default_rig_path
     from autobones.io.atomic import write_text_atomic
     from autobones.rig_transfer.joints import FACE_JOINTS_FILE, FACE_JOINTS_FORMAT
-    from autobones.rig_transfer.pipeline import generic_detected_landmarks, load_generic
+    from autobones.rig_transfer.pipeline import face_motion, generic_detected_landmarks, load_generic
 
     generic = load_generic()
     bones = list(generic.skeleton.names)
@@ -159,7 +160,7 @@ def main(argv=None):
     out = {"format": FACE_JOINTS_FORMAT, "heads": sorted(heads),
            "families": sorted({h["family"] for h in heads.values()})}
     for kind, (G, faces) in kinds.items():
-        rows, errors, samples = compare(kind, G, own, heads, faces)
+        rows, errors, samples = compare(kind, G, own, heads, faces, face_motion(generic))
         report(kind, rows, errors, args.markdown)
         out[kind] = {j: [float(x) for x in p] for j, p in calibrated(list(samples.values()), G).items()}
     if not args.dry_run:

@@ -64,17 +64,28 @@ def align_rotation(a, b):
     return np.eye(3) + K + K @ K / (1.0 + c)
 
 
-def similarity(P, Q):
+def similarity(P, Q, weights=None):
     """Least-squares similarity (Umeyama 1991) taking points ``P`` (k, 3) onto ``Q`` (k, 3) about their
     means: scale ``s`` and proper rotation ``R`` (3, 3) minimising ``sum ||s R (p - mean p) - (q - mean q)||^2``
-    (the translation is ``mean q - s R mean p``)."""
-    P0, Q0 = P - P.mean(axis=0), Q - Q.mean(axis=0)
-    U, S, Vt = np.linalg.svd(Q0.T @ P0)
+    (the translation is ``mean q - s R mean p``). With ``weights`` (k,) (non-negative, not all 0) each
+    term of the sum and the means are weighted (:func:`weighted_mean`)."""
+    P0, Q0 = P - weighted_mean(P, weights), Q - weighted_mean(Q, weights)
+    wP0 = P0 if weights is None else P0 * np.asarray(weights, dtype=np.float64)[:, None]
+    U, S, Vt = np.linalg.svd(Q0.T @ wP0)
     d = np.sign(np.linalg.det(U @ Vt)) or 1.0
     D = np.diag([1.0, 1.0, d])
     R = U @ D @ Vt
-    s = float(np.trace(np.diag(S) @ D) / max((P0 ** 2).sum(), 1e-300))
+    s = float(np.trace(np.diag(S) @ D) / max(float((wP0 * P0).sum()), 1e-300))
     return s, R
+
+
+def weighted_mean(P, weights=None):
+    """The mean (3,) of points ``P`` (k, 3), each weighted by ``weights`` (k,) when given: the centre
+    :func:`similarity` turns about."""
+    if weights is None:
+        return P.mean(axis=0)
+    w = np.asarray(weights, dtype=np.float64)
+    return (w @ P) / w.sum()
 
 
 def polar_rotations(M):

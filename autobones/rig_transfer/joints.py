@@ -185,37 +185,47 @@ def face_fit(G, landmarks, motion=None):
     The gate's residual is over every shared name (the humans' 0.04-0.08 ex-ex stand furthest from the
     animals' so): within ``HUMAN_FIT`` of the neutral generic's, or with ``motion``
     (:func:`autobones.rig_transfer.pipeline.face_motion`) within ``HUMAN_FIT_EXPRESSIVE`` of the
-    generic wearing the expression that fits best (a smiling or open-mouthed face is a human's too);
-    the map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there
-    are ``MIN_FACE`` of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them,
-    0.08 without, and a neutral face's joints 0.00-0.02 either way."""
-    from ..geometry.rotations import similarity
+    generic wearing the expression that fits best (a smiling or open-mouthed face is a human's too).
+    The map is fitted on the names the jaw does not carry (``JAW_CARRIED``) when there are ``MIN_FACE``
+    of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them, 0.08 without. With
+    ``motion`` each of those names weighs by how still the generic's expressions leave it
+    (:func:`autobones.landmarks.human_face.stillness`): a smile's mouth corners and surprised brows
+    moved the head joint 0.13-0.15 ex-ex, 0.05-0.07 weighted (benchmarks/README.md, "the face's pose
+    from what expressions leave still")."""
+    from ..geometry.rotations import similarity, weighted_mean
 
     shared = [n for n in landmarks if n in G]
-    if any(n in landmarks for n in BACK_LANDMARKS) or len(shared) < MIN_FACE \
-            or not all(n in G for n in ("exocanthion_l", "exocanthion_r")):
+    eyes = ("exocanthion_l", "exocanthion_r")
+    if any(n in landmarks for n in BACK_LANDMARKS) or len(shared) < MIN_FACE or not all(n in G for n in eyes):
         return None
 
-    def fit(names):
+    def fit(names, weights=None):
         P = np.array([G[n] for n in names], dtype=np.float64)
         Q = np.array([landmarks[n] for n in names], dtype=np.float64)
-        s, R = similarity(P, Q)
-        p0, q0 = P.mean(axis=0), Q.mean(axis=0)
+        s, R = similarity(P, Q, weights)
+        p0, q0 = weighted_mean(P, weights), weighted_mean(Q, weights)
         return s, R, p0, q0, np.sqrt((((Q - q0) - s * (P - p0) @ R.T) ** 2).sum(axis=1).mean())
 
     s, R, p0, q0, residual = fit(shared)
-    exex = s * float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
-    eyes = ("exocanthion_l", "exocanthion_r")
+    g_exex = float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
+    moves = None
     if motion is not None and all(n in landmarks for n in eyes):
         from ..landmarks.human_face import face_distance
 
         names = list(eyes) + [n for n in shared if n not in eyes]
-        if not face_distance(landmarks, G, motion(G, names), names=names) <= HUMAN_FIT_EXPRESSIVE:
+        D = motion(G, names)
+        if not face_distance(landmarks, G, D, names=names) <= HUMAN_FIT_EXPRESSIVE:
             return None
-    elif not residual <= HUMAN_FIT * exex:
+        moves = dict(zip(names, np.swapaxes(D, 0, 1)))
+    elif not residual <= HUMAN_FIT * (s * g_exex):
         return None
     upper = [n for n in shared if n not in JAW_CARRIED]
-    if len(upper) >= MIN_FACE:
+    names = upper if len(upper) >= MIN_FACE else shared
+    if moves is not None:
+        from ..landmarks.human_face import stillness
+
+        s, R, p0, q0, _ = fit(names, stillness(np.stack([moves[n] for n in names], axis=1), g_exex))
+    elif names is upper:
         s, R, p0, q0, _ = fit(upper)
     return s, R, p0, q0
 
