@@ -190,8 +190,9 @@ def face_fit(G, landmarks, motion=None):
     of them: an open jaw (ICT's jawOpen) moved the head joint 0.18 ex-ex with them, 0.08 without. With
     ``motion`` each of those names weighs by how still the generic's expressions leave it
     (:func:`autobones.landmarks.human_face.stillness`): a smile's mouth corners and surprised brows
-    moved the head joint 0.13-0.15 ex-ex, 0.05-0.07 weighted (benchmarks/README.md, "the face's pose
-    from what expressions leave still")."""
+    put ICT's people's head joints 0.12-0.20 ex-ex from the anatomy, 0.06-0.10 weighted (their family
+    held out of the calibration: benchmarks/README.md, "the face's pose from what expressions leave
+    still")."""
     from ..geometry.rotations import similarity, weighted_mean
 
     shared = [n for n in landmarks if n in G]
