@@ -37,6 +37,7 @@ import zoo_checks as zc  # noqa: E402
 
 import autobones  # noqa: E402
 import autobones.landmarks.human_face as human_face  # noqa: E402
+from autobones.arkit.names import ARKIT_NAMES, ict_names  # noqa: E402
 from autobones.generic_rig import default_rig_path  # noqa: E402
 from autobones.geometry.closest import closest_points  # noqa: E402
 from autobones.io.landmarks import read_landmarks  # noqa: E402
@@ -66,11 +67,7 @@ BOUND = 0.15
 
 def arkit_names(expression):
     """The generic space's ARKit names an ICT expression's shapes stand for (its `expressions.npz`)."""
-    out = set()
-    for n in expression:
-        n = n.replace("_L", "Left").replace("_R", "Right")
-        out.add("browInnerUp" if n.startswith("browInnerUp") else n)
-    return out
+    return {a for a in ARKIT_NAMES if set(ict_names(a)) & set(expression)}
 
 
 def held_out_calibration(generic, motion):

@@ -7,7 +7,7 @@ from autobones.errors import AutobonesError
 from autobones.geometry import laplacian as lap
 from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
-from autobones.geometry.rotations import polar_rotations, rotate_between, similarity, weighted_mean
+from autobones.geometry.rotations import polar_rotations, rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
                                          weld_by_size, without_large_parts)
@@ -201,7 +201,7 @@ def test_weighted_similarity_follows_the_weighted_points():
     w = np.r_[np.zeros(3), rng.uniform(0.5, 2.0, 9)]
     s, R = similarity(P, Q, w)
     assert abs(s - 0.7) < 1e-12 and np.abs(R - R0).max() < 1e-12
-    p0, q0 = weighted_mean(P, w), weighted_mean(Q, w)
+    p0, q0 = np.average(P, axis=0, weights=w), np.average(Q, axis=0, weights=w)
     np.testing.assert_allclose(q0 + s * (P[3:] - p0) @ R.T, Q[3:], atol=1e-12)
     s1, R1 = similarity(P, Q)                            # unweighted: the moved points pull it off
     assert abs(s1 - 0.7) > 1e-3

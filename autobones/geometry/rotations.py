@@ -68,8 +68,8 @@ def similarity(P, Q, weights=None):
     """Least-squares similarity (Umeyama 1991) taking points ``P`` (k, 3) onto ``Q`` (k, 3) about their
     means: scale ``s`` and proper rotation ``R`` (3, 3) minimising ``sum ||s R (p - mean p) - (q - mean q)||^2``
     (the translation is ``mean q - s R mean p``). With ``weights`` (k,) (non-negative, not all 0) each
-    term of the sum and the means are weighted (:func:`weighted_mean`)."""
-    P0, Q0 = P - weighted_mean(P, weights), Q - weighted_mean(Q, weights)
+    term of the sum and the means are weighted (``np.average``'s)."""
+    P0, Q0 = P - np.average(P, axis=0, weights=weights), Q - np.average(Q, axis=0, weights=weights)
     wP0 = P0 if weights is None else P0 * np.asarray(weights, dtype=np.float64)[:, None]
     U, S, Vt = np.linalg.svd(Q0.T @ wP0)
     d = np.sign(np.linalg.det(U @ Vt)) or 1.0
@@ -77,15 +77,6 @@ def similarity(P, Q, weights=None):
     R = U @ D @ Vt
     s = float(np.trace(np.diag(S) @ D) / max(float((wP0 * P0).sum()), 1e-300))
     return s, R
-
-
-def weighted_mean(P, weights=None):
-    """The mean (3,) of points ``P`` (k, 3), each weighted by ``weights`` (k,) when given: the centre
-    :func:`similarity` turns about."""
-    if weights is None:
-        return P.mean(axis=0)
-    w = np.asarray(weights, dtype=np.float64)
-    return (w @ P) / w.sum()
 
 
 def polar_rotations(M):

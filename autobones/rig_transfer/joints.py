@@ -193,7 +193,7 @@ def face_fit(G, landmarks, motion=None):
     put ICT's people's head joints 0.12-0.20 ex-ex from the anatomy, 0.06-0.10 weighted (their family
     held out of the calibration: benchmarks/README.md, "the face's pose from what expressions leave
     still")."""
-    from ..geometry.rotations import similarity, weighted_mean
+    from ..geometry.rotations import similarity
 
     shared = [n for n in landmarks if n in G]
     eyes = ("exocanthion_l", "exocanthion_r")
@@ -204,31 +204,26 @@ def face_fit(G, landmarks, motion=None):
         P = np.array([G[n] for n in names], dtype=np.float64)
         Q = np.array([landmarks[n] for n in names], dtype=np.float64)
         s, R = similarity(P, Q, weights)
-        p0, q0 = weighted_mean(P, weights), weighted_mean(Q, weights)
+        p0, q0 = np.average(P, axis=0, weights=weights), np.average(Q, axis=0, weights=weights)
         return s, R, p0, q0, np.sqrt((((Q - q0) - s * (P - p0) @ R.T) ** 2).sum(axis=1).mean())
 
-    s, R, p0, q0, residual = fit(shared)
     g_exex = float(np.linalg.norm(np.asarray(G["exocanthion_l"]) - np.asarray(G["exocanthion_r"])))
-    moves = None
-    if motion is not None and all(n in landmarks for n in eyes):
-        from ..landmarks.human_face import face_distance
-
-        names = list(eyes) + [n for n in shared if n not in eyes]
-        D = motion(G, names)
-        if not face_distance(landmarks, G, D, names=names) <= HUMAN_FIT_EXPRESSIVE:
-            return None
-        moves = dict(zip(names, np.swapaxes(D, 0, 1)))
-    elif not residual <= HUMAN_FIT * (s * g_exex):
-        return None
     upper = [n for n in shared if n not in JAW_CARRIED]
     names = upper if len(upper) >= MIN_FACE else shared
-    if moves is not None:
-        from ..landmarks.human_face import stillness
+    if motion is not None and all(n in landmarks for n in eyes):
+        from ..landmarks.human_face import face_distance, stillness
 
-        s, R, p0, q0, _ = fit(names, stillness(np.stack([moves[n] for n in names], axis=1), g_exex))
-    elif names is upper:
-        s, R, p0, q0, _ = fit(upper)
-    return s, R, p0, q0
+        gate = list(eyes) + [n for n in shared if n not in eyes]
+        D = motion(G, gate)
+        if not face_distance(landmarks, G, D, names=gate) <= HUMAN_FIT_EXPRESSIVE:
+            return None
+        weights = stillness(D[:, [gate.index(n) for n in names]], g_exex)
+    else:
+        s, _, _, _, residual = fit(shared)
+        if not residual <= HUMAN_FIT * (s * g_exex):
+            return None
+        weights = None
+    return fit(names, weights)[:4]
 
 
 def _from_the_ears(G, landmarks):
