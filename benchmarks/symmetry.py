@@ -8,7 +8,7 @@ Run by hand, not by the tests::
 
 Every head is rigged by ``autobones.transfer`` with its landmark file and
 ``ExpressionModel`` is fitted on it. The mirror plane is the landmarks' own
-(``autobones.landmarks.refine.symmetry_plane``: normal the median unit ``x_l - x_r``, through
+(``autobones.landmarks.refine.symmetry_plane``: normal the pairs' mean ``x_l - x_r``, through
 the median of the pair midpoints and midline names), so nothing assumes the file's axes. All lengths are in percent
 of the head's exocanthion distance (ex-ex). Columns:
 
