@@ -96,7 +96,7 @@ def main(argv=None):
           f"{'chin':>4s} {'lip':>4s} {'jump':>4s} {'>0.3':>5s} | {'mean|d|':>7s} {'>0.1':>6s} {'s':>5s}")
     print(f"{'':22s} {'':7s} | {'before':^21s} | {'after':^21s} |")
     for name, V, F, lm in heads(names):
-        with mock.patch.object(pipeline, "repair_jaw_weights", lambda V, F, W, names, lm, details=None: W):
+        with mock.patch.object(pipeline, "repair_jaw_weights", lambda V, F, W, names, lm, details=None, still=None: W):
             before = jaw_of(autobones.transfer((V, F), lm))
         t = time.perf_counter()
         after = jaw_of(autobones.transfer((V, F), lm))

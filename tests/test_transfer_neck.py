@@ -107,7 +107,12 @@ def test_the_neck_base_does_not_depend_on_the_files_rotation_or_unit(cow, cow_ri
                   [2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d]])
     lm_t = {n: R @ np.asarray(p) for n, p in lm.items()}
     turned = autobones.transfer((V @ R.T, F), lm_t)
-    # (the carried weights themselves differ by up to 0.11 on this turned copy, before this step too)
+    # the joints are the same; the weights differ by up to 0.03 (0.11 until the jaw's repair read the
+    # right edges' lengths): two generic vertices the fit cannot place (on the midline behind the
+    # cow's cut) are stuck onto one of two mirror-image points at equal distance, and which one
+    # follows the file's axes (test_transfer.py has a head without such a tie)
+    np.testing.assert_allclose(np.asarray(turned.skeleton.heads) @ R, cow_rig.skeleton.heads,
+                               atol=1e-9 * float(np.ptp(V, axis=0).max()))
     by_count, by_height, _ = _base_motion(V @ R.T, F, lm_t, turned)
     assert by_count <= 0.01 and by_height <= 0.01
 

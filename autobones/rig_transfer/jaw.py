@@ -92,7 +92,10 @@ REACH = 0.4             # fu: vertices farther than this from any jaw weight kee
 def _mean_edge_length(n, E, V):
     """(n,) mean length of each vertex's edges (0 for a vertex on none)."""
     length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
-    total = np.bincount(E.ravel(), weights=np.r_[length, length], minlength=n)
+    # E.ravel() lists each edge's two ends in turn, so each length twice in turn (until 2026-12-06 the
+    # lengths were listed all once then all again: a vertex got other edges' lengths, which changed
+    # with the order the weld put the vertices in, i.e. with the file's axes)
+    total = np.bincount(E.ravel(), weights=np.repeat(length, 2), minlength=n)
     count = np.bincount(E.ravel(), minlength=n)
     return total / np.maximum(count, 1)
 
@@ -172,8 +175,11 @@ def repair_jaw(V, F, jaw, landmarks, keep=None, details=None, still=None):
     L, m = _local_laplacian(Vw, Fw, fixed)
     m = np.where(m > 0, m, h ** 2)  # vertices on no face: a nominal area
     # the data term holds the jaw's core harder than its rim: the falloff widens outward (into the
-    # neck and the cheeks) instead of eating into the chin
-    lam = (0.1 + 0.9 * ww) * m / h ** 2
+    # neck and the cheeks) instead of eating into the chin. One screening length for the head, its
+    # median edge: with each vertex's own (correct) edge length the coarse robot's chin, two edges
+    # under its nose, was smoothed to 0.33 of the jaw, 0.78 with the median (every other head alike,
+    # benchmarks/README.md "the jaw's repair reads its own edges")
+    lam = (0.1 + 0.9 * ww) * m / h_med ** 2
     x, rounds = _solve(Ew, L, lam, ww, value, fixed, on_line_w, check)
 
     out = x[index]
