@@ -197,7 +197,9 @@ class ViewHandler(TimedHandler):
                 return self._send_json(rig_facts(site.root, self._rel(path), batch_record(site, self._rel(path))))
             if name == "weights":
                 w = bone_weights(path, query.get("bone", ""))
-                return self._send_json({"bone": query.get("bone"), "weights": [round(float(x), 5) for x in w]})
+                # 7 significant digits, not 5 decimals: a weight of 1.05e-4 went out as 1e-4 and the page, which
+                # greys what is not above 1e-4 as the glb's own colours do, greyed it
+                return self._send_json({"bone": query.get("bone"), "weights": [float(f"{x:.7g}") for x in w]})
             return self._send_bytes(self.server.thumbnails.get(path), "image/png", cache=False)
         return self._send_error(HTTPStatus.NOT_FOUND, "no such API")
 
