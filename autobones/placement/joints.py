@@ -30,8 +30,7 @@ The head joint (``head`` cues):
   and no neck to measure: on a human face the pivot is where human faces put it, placed by the face's
   automatic landmarks (``face_landmarks``, :mod:`autobones.rig_transfer.face_joints`: 0.04-0.25 ex-ex
   from Chancey's centre on the shared heads cut into masks where a face is found, 0.10 mean, with the
-  head's family held out of the calibration), on the landmarks' midplane, not at x = 0 (a mask's
-  shape-only frame can lean: James' by 6 deg); else far behind
+  head's family held out of the calibration); else far behind
   it, from the nose (``nose``: the midline profile's most anterior point, and the mask's width there
   as the scale, ``nose_width``: on James and the menpo template 0.191 / 0.173 ex-ex from Chancey's
   centre, most of it the mask's pitch in its frame times the 1.5 ex-ex lever; the mask's proportions
