@@ -93,7 +93,7 @@ class Joints:
     Attributes
     ----------
     head, neck : (3,) float
-        Canonical joint positions, on the midline (x = 0; a face mask's on its landmarks' midplane).
+        Canonical joint positions, on the midline (x = 0).
     menton : float
         The menton's height used (found or expected).
     chin_front : float
@@ -159,9 +159,9 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None, pivot=Non
         The mesh is a face-only capture (:func:`autobones.geometry.head_share.face_only`).
     base : float, optional
         The neck base's top (:func:`autobones.geometry.head_share.neck_base_height`); default ``NECK_BASE`` of the height.
-    pivot : (3,) float, optional
-        A face mask's pivot from its landmarks (:mod:`autobones.rig_transfer.face_joints`), on their
-        midplane, taken instead of the nose rule.
+    pivot : (float, float), optional
+        A face mask's pivot (height, depth) from its landmarks (:mod:`autobones.rig_transfer.face_joints`),
+        taken instead of the nose rule.
 
     Returns
     -------
@@ -176,10 +176,9 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None, pivot=Non
         top = float(strip.max())
         head_cues.append("midline_top")
     length = head_length(prof, top)
-    x_head = 0.0
     if face_mask:
-        x_head, y_head, z_head, mask_cues = (*pivot, ["face_landmarks"]) if pivot is not None else \
-            (0.0, *_mask_pivot(prof, top, bottom, chin))
+        y_head, z_head, mask_cues = (*pivot, ["face_landmarks"]) if pivot is not None else \
+            _mask_pivot(prof, top, bottom, chin)
         head_cues += ["face_only"] + mask_cues
     else:
         # the head's height scale is its length, front to back, or the length its height down to
@@ -209,7 +208,7 @@ def find_joints(S, bottom, top, chin=None, face_mask=False, base=None, pivot=Non
     else:
         y_neck, z_neck = bottom, z_head
         neck_cues += ["face_only"] if face_mask else ["bottom_cut"]
-    return Joints(head=np.array([x_head, y_head, z_head]), neck=np.array([x_head, y_neck, z_neck]), menton=menton,
+    return Joints(head=np.array([0.0, y_head, z_head]), neck=np.array([0.0, y_neck, z_neck]), menton=menton,
                   chin_front=_front(prof, menton), menton_source="proportions" if chin is None else "chin",
                   neck_section=None if neck is None else neck["height"],
                   cues={"head": head_cues, "neck": neck_cues})

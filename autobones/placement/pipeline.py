@@ -136,8 +136,8 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
 
 
 def _face_mask_pivot(C, F):
-    """((3,) float, None): a face mask's head pivot (canonical, head sizes) from its automatic
-    landmarks, on their midplane (:func:`autobones.rig_transfer.face_joints.face_joints`); (None, why not) when none is
+    """((height, depth), None): a face mask's head pivot (canonical, head sizes) from its automatic
+    landmarks (:func:`autobones.rig_transfer.face_joints.face_joints`); (None, why not) when none is
     found; (None, None) for a mesh that is no face mask. Found on the canonical mesh ``C`` (n, 3), in
     the canonical frame: a turned or rescaled copy of a head then gives the detector the same pictures
     (on the input's own vertices the menpo template's pivot moved 0.04 head sizes between copies)."""
@@ -149,10 +149,7 @@ def _face_mask_pivot(C, F):
     if joints is None:
         log.info("face mask: its pivot from its nose (automatic landmarks: %s)", note)
         return None, note
-    # its side too: a mask's shape-only midplane can lean where its face's landmarks do not (James: the
-    # frame's 6 deg from the hand-placed landmarks' put the pivot 0.022 ex-ex off their midplane, the
-    # detected landmarks' midplane 0.002)
-    return np.asarray(joints["head"], dtype=np.float64), None
+    return (float(joints["head"][1]), float(joints["head"][2])), None
 
 
 def _depth_skeleton(seg, heads, tails, n_bones):

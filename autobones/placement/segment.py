@@ -99,8 +99,8 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     volume : (Vc, Fc), optional
         A coarser copy of the same surface (canonical frame) for the inside tests that keep the
         bones in the volume: winding numbers cost a tree over every triangle.
-    pivot : (3,) float, optional
-        A face mask's head pivot (canonical, on its landmarks' midplane) from its landmarks (:func:`.joints.find_joints`).
+    pivot : (float, float), optional
+        A face mask's head pivot (height, depth; canonical) from its landmarks (:func:`.joints.find_joints`).
 
     Returns
     -------
@@ -173,7 +173,7 @@ def _joints(V, F, Vm, chin, seed, volume, head_mean, neck_mean, mask, pivot=None
                         base=neck_base_height(Vm[:, 1]), pivot=pivot if mask else None)
     joint, neck_root = found.head.copy(), found.neck.copy()
     top = Vm[:, 1].max()
-    head_tail = np.array([joint[0], joint[1] + 0.8 * (top - joint[1]), joint[2]])
+    head_tail = np.array([0.0, joint[1] + 0.8 * (top - joint[1]), joint[2]])
     # keep the bones inside the volume (horns, a long muzzle, a thin neck or shoulders can put the
     # geometric ends outside): pull each end toward its part's mean until it is inside
     # (a face mask has no inside: its pivot lies behind it, in the head it does not have)
