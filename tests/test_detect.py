@@ -106,6 +106,12 @@ def test_symmetry_plane_of_placed_landmarks_turns_and_scales_with_them():
         n, c = symmetry_plane({k: 1000.0 * (R @ p) + 5.0 for k, p in pts.items()})
         np.testing.assert_allclose(R.T @ n, n0, atol=1e-12)
         assert (c - 5.0 * n.sum()) / 1000.0 == pytest.approx(c0, abs=1e-9)
+    # integer coordinates (a hand-written file, a grid) give the plane their floats give
+    ints = {k: np.round(100.0 * p).astype(np.int64) for k, p in pts.items()}
+    n, c = symmetry_plane(ints)
+    n1, c1 = symmetry_plane({k: p.astype(np.float64) for k, p in ints.items()})
+    np.testing.assert_array_equal(n, n1)
+    assert c == c1
 
 
 def test_refine_makes_pairs_mirror_images_and_flags_a_lopsided_pair():

@@ -46,10 +46,10 @@ def symmetry_plane(points):
     """
     pairs = [(np.asarray(points[n]), np.asarray(points[mirror_name(n)]))
              for n in points if n.endswith("_l") and mirror_name(n) in points]
-    if not pairs:
-        return np.array([1.0, 0.0, 0.0]), 0.0
-    normal = np.sum([a - b for a, b in pairs], axis=0)
-    if not np.linalg.norm(normal) > 0:   # every pair on one point: no side to tell
+    # float64 whatever the points' dtype (integer coordinates summed to an integer vector, which
+    # cannot be divided in place); no pair, or every pair on one point: no side to tell
+    normal = np.sum([a - b for a, b in pairs], axis=0, dtype=np.float64) if pairs else np.zeros(3)
+    if not np.linalg.norm(normal) > 0:
         return np.array([1.0, 0.0, 0.0]), 0.0
     normal /= np.linalg.norm(normal)
     on = [np.asarray(p) for n, p in points.items() if not n.endswith(("_l", "_r"))]
