@@ -100,8 +100,10 @@ def still_neck_base(V, F, W, skeleton, frame, landmarks, facial_mask, cues=None,
     # the bands are head sizes: on a coarse mesh some are an edge wide, a step of the jaw weight
     share = smooth_share(share, C, F)
     # the jaw's repair (after this) holds the still vertices, but not in the face's band: where the chin
-    # nears the base (the bunny, the falcon statue) the jaw as the landmarks say wins over a still base
-    still = (share <= STILL) & (hold <= 0)
+    # nears the base (the bunny, the falcon statue) the jaw as the landmarks say wins over a still base.
+    # The band's smooth tail is no band: held only where hold was exactly 0, the SMPL woman's throat at
+    # hold 3e-5 took jaw weight 0.11-0.13 from the chin's falloff and a head turn moved her neck base 7 %
+    still = (share <= STILL) & (hold <= STILL)
     return apply_head_share(np.array(W, dtype=np.float64), share, neck=neck, head=head), still
 
 
