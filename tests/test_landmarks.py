@@ -310,6 +310,29 @@ def test_landmarks_off_the_surface(ict):
     assert len(validate_landmarks(moved, V, F, max_off_surface=0.3)) == 27
 
 
+def test_a_speck_of_landmarks_on_a_scan_whose_origin_is_on_its_face():
+    """James' scan (millimetres) has its origin on his face, so landmarks in metres, or the goat's (a
+    12-unit cluster), all lie within 0.05 head sizes of his surface: before, the first were taken and the fit
+    failed with "no reliable correspondence", the second were refused as left and right swapped."""
+    from pathlib import Path
+
+    from autobones.io.landmark_checks import landmark_problems
+
+    p = data("menpo3d/james.obj")
+    V, F = load_mesh(p)
+    lm = read_landmarks(p.with_suffix(".landmarks.json"))
+    metres = {n: np.asarray(x) * 0.001 for n, x in lm.items()}
+    msg = _error(validate_landmarks, metres, V, F, source="m.json")
+    assert "m.json" in msg and "gather within" in msg and "metres for a mesh in millimetres" in msg
+    goat = read_landmarks(Path(__file__).parent / "landmarks" / "goathead.landmarks.json")
+    msg = _error(validate_landmarks, goat, V, F, detect_frame(V, F))
+    assert "gather within" in msg and "this mesh's landmarks" in msg and "swapped" not in msg
+    # the editor's live check says the same, once enough are placed to judge the set
+    assert any("gather within" in t for t in landmark_problems(metres, V, F)["set"])
+    assert not any("gather within" in t for t in landmark_problems(dict(list(metres.items())[:5]), V, F)["set"])
+    assert len(validate_landmarks(lm, V, F)) == len(lm)
+
+
 # --- hostile files --------------------------------------------------------------------------------
 
 HOSTILE = {

@@ -1,7 +1,7 @@
 """Checks of landmark values against the contract and the mesh they belong to.
 
-:func:`validate_landmarks` checks names and values, then, given the mesh, the distance to its
-surface (with a hint when the units differ) and, given the head's canonical frame
+:func:`validate_landmarks` checks names and values, then, given the mesh, the set's spread on the head
+and the distance to its surface (with a hint when the units differ) and, given the head's canonical frame
 (+X the subject's left), that no ``_l`` / ``_r`` pair is exchanged. Every problem is one
 :class:`~autobones.errors.AutobonesError` naming the source. :func:`shorten` and
 :func:`quoted` keep the values quoted in messages on one line (the file readers use them too).
@@ -65,7 +65,8 @@ def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, sour
         One line naming ``source`` and the offending landmarks, for: unknown
         names (with the closest valid name), values that are not 3 finite
         numbers, fewer than ``min_count`` landmarks, two landmarks at the same
-        point, all landmarks on one line, landmarks farther than
+        point, all landmarks on one line, a set gathered within :data:`MIN_SPREAD`
+        head sizes of its centre (RMS; :func:`speck`), landmarks farther than
         ``max_off_surface`` from the mesh (with a hint when a global scale by
         1000, 100, 10, 0.1, 0.01 or 0.001 would put them on it: mismatched
         units), and, when ``frame`` is given, ``_l`` / ``_r`` exchanged: in
@@ -92,6 +93,7 @@ def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, sour
         head = float((V.max(axis=0) - V.min(axis=0)).max())
     _check_spread(P, names, head, source)
     if head is not None:
+        _check_speck(P, V, F, head, source, max_off_surface)
         _check_surface(P, names, V, F, head, source, max_off_surface)
     if frame is not None:
         _check_sides(clean, frame, source)
@@ -135,6 +137,10 @@ def landmark_problems(landmarks, V, F, frame=None, min_count=10, max_off_surface
         add(names[j], f"at the same point as {names[i]}")
     if on_one_line(P):
         set_out.append(f"all {len(P)} landmarks lie on one line; spread them over the face")
+    spread = speck(P, head) if len(clean) >= min_count else None
+    if spread is not None:
+        set_out.append(f"the landmarks gather within {spread:.2g} head sizes of their centre (a head's spread "
+                       f"{MIN_SPREAD:g} or more): another mesh's, or in other units?")
     d = surface_offsets(P, V, F, head)
     far = d > max_off_surface
     for i in np.flatnonzero(far):
@@ -260,6 +266,33 @@ def unit_hint(P, far, V, F, head, max_off):
         if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
             best = (near, scale, meaning)
     return None if best is None else best[1:]
+
+
+def speck(P, head):
+    """The RMS distance of the points ``P`` (k, 3) from their centroid in head sizes ``head`` when it is
+    under :data:`MIN_SPREAD` (a set that small on the head is no head's landmarks: another mesh's file, or
+    another unit's, whose points can all lie near a surface that passes through the origin); else None."""
+    if len(P) < 3 or not np.isfinite(P).all():
+        return None
+    spread = float(np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())) / head
+    return spread if spread < MIN_SPREAD else None
+
+
+def _check_speck(P, V, F, head, source, max_off):
+    # a scan whose origin lies on its face (James' does) took landmarks in metres for its millimetres as
+    # on its surface, and the fit then failed with "no reliable correspondence", naming no cause
+    spread = speck(P, head)
+    if spread is None:
+        return
+    msg = (f"{source}: the {len(P)} landmarks gather within {spread:.2g} head sizes of their centre (a head's "
+           f"landmarks spread {MIN_SPREAD:g} or more)")
+    hint = unit_hint(P, np.ones(len(P), dtype=bool), V, F, head, max_off)
+    if hint is not None:
+        msg += (f"; wrong units? scaled by {hint[0]:g} they lie on the surface, so they look like {hint[1]}: "
+                "give the landmarks in the mesh's units")
+    else:
+        msg += "; are they this mesh's landmarks, in its own coordinates (same frame and units)?"
+    raise AutobonesError(msg)
 
 
 def _check_surface(P, names, V, F, head, source, max_off):
