@@ -272,9 +272,11 @@ def speck(P, head):
     """The RMS distance of the points ``P`` (k, 3) from their centroid in head sizes ``head`` when it is
     under :data:`MIN_SPREAD` (a set that small on the head is no head's landmarks: another mesh's file, or
     another unit's, whose points can all lie near a surface that passes through the origin); else None."""
-    if len(P) < 3 or not np.isfinite(P).all():
+    if len(P) < 3 or not np.isfinite(P).all() or not head > 0:
         return None
-    spread = float(np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())) / head
+    m = float(np.abs(P).max())   # on P / max|P|: huge (finite) coordinates must not overflow the squares
+    Q = P / m if m > 0 else P
+    spread = float(np.sqrt(((Q - Q.mean(axis=0)) ** 2).sum(axis=1).mean())) * (m / head if m > 0 else 0.0)
     return spread if spread < MIN_SPREAD else None
 
 
