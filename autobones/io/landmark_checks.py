@@ -259,8 +259,7 @@ def unit_hint(P, far, V, F, head, max_off):
     for scale, meaning in _UNIT_HINTS:
         with np.errstate(over="ignore", invalid="ignore"):
             scaled = P * scale
-            spread = float(np.sqrt(((scaled - scaled.mean(axis=0)) ** 2).sum(axis=1).mean())) / head
-        if not MIN_SPREAD <= spread <= MAX_SPREAD:
+        if not MIN_SPREAD <= rms_spread(scaled, head) <= MAX_SPREAD:
             continue
         near = int((surface_offsets(scaled, V, F, head) <= max_off).sum())
         if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
@@ -268,15 +267,21 @@ def unit_hint(P, far, V, F, head, max_off):
     return None if best is None else best[1:]
 
 
-def speck(P, head):
-    """The RMS distance of the points ``P`` (k, 3) from their centroid in head sizes ``head`` when it is
-    under :data:`MIN_SPREAD` (a set that small on the head is no head's landmarks: another mesh's file, or
-    another unit's, whose points can all lie near a surface that passes through the origin); else None."""
-    if len(P) < 3 or not np.isfinite(P).all() or not head > 0:
-        return None
+def rms_spread(P, head):
+    """The RMS distance of the points ``P`` (k, 3) from their centroid, in head sizes ``head`` (float);
+    inf for points that are not all finite or a head of no size."""
+    if not np.isfinite(P).all() or not head > 0:
+        return np.inf
     m = float(np.abs(P).max())   # on P / max|P|: huge (finite) coordinates must not overflow the squares
     Q = P / m if m > 0 else P
-    spread = float(np.sqrt(((Q - Q.mean(axis=0)) ** 2).sum(axis=1).mean())) * (m / head if m > 0 else 0.0)
+    return float(np.sqrt(((Q - Q.mean(axis=0)) ** 2).sum(axis=1).mean())) * (m / head if m > 0 else 0.0)
+
+
+def speck(P, head):
+    """:func:`rms_spread` of the points ``P`` (k, 3) when it is under :data:`MIN_SPREAD` (a set that small
+    on the head is no head's landmarks: another mesh's file, or another unit's, whose points can all lie
+    near a surface that passes through the origin); else None."""
+    spread = rms_spread(P, head) if len(P) >= 3 else np.inf
     return spread if spread < MIN_SPREAD else None
 
 
