@@ -156,10 +156,11 @@ def ict_expression_space(shapes, held_out):
     return {"names": names, "basis": np.stack([shapes[f"expression/{n}"] for n in names]).astype(np.float64)}
 
 
-def families(quick, jaw=True, symmetric="off", prior=False, ids=None, exprs=None, variants=None):
+def families(quick, jaw=True, symmetric="off", prior=False, ids=None, exprs=None, variants=None, far_field="local"):
     """Identities x expressions x variants, errors per region (module doc, ``--families``); ``jaw``:
     the source's jaw prior (:func:`ict_jaw_prior`) on, else off; ``prior``: the expression prior on
-    (:func:`ict_expression_space`, each target's expression and its mirror left out of it)."""
+    (:func:`ict_expression_space`, each target's expression and its mirror left out of it); ``far_field``:
+    the warp the fit starts from (``fit_surface``'s; ``local``, what ``transfer`` uses on a human face)."""
     import fast_simplification
     import trimesh
 
@@ -179,7 +180,7 @@ def families(quick, jaw=True, symmetric="off", prior=False, ids=None, exprs=None
     exprs = exprs or ([None, "jawOpen", "mouthSmile_L"] if quick else
                       [None, "jawOpen", "mouthSmile_L", "eyeBlink_L", "mouthPucker", "browInnerUp_L"])
     variants = variants or ("as is", "remeshed", "decimated 5k", "x1000")
-    print(f"# ICT families: source the neutral head (27 landmarks), jaw prior {'on' if jaw else 'off'}; {len(ids)} identities x {len(exprs)} expressions "
+    print(f"# ICT families: source the neutral head (27 landmarks), jaw prior {'on' if jaw else 'off'}, warp {far_field}; {len(ids)} identities x {len(exprs)} expressions "
           f"x {len(variants)} variants; regions (vertices): "
           + ", ".join(f"{r} {int((region == i).sum())}" for i, r in enumerate(REGIONS)))
     pooled = {(v, r): [] for v in variants for r in REGIONS}
@@ -211,7 +212,8 @@ def families(quick, jaw=True, symmetric="off", prior=False, ids=None, exprs=None
                 lm_T = {n: scale * p for n, p in lm_t.items()}
                 sym = Symmetry(symmetric).fit(Vn, F, lm_n, VT, FT, lm_T)
                 R = dense_correspondence(Vn, F, VT, FT, lm_n, lm_T, jaw=jaw_prior, details=info,
-                                         symmetry=sym.fit_option(), expressions=space)[0]
+                                         symmetry=sym.fit_option(), expressions=space,
+                                         far_field=far_field)[0]
                 dt = time.perf_counter() - t
                 e = 100 * np.linalg.norm(R / scale - Vt, axis=1) / exex
                 for i, r in enumerate(REGIONS):
@@ -257,12 +259,15 @@ def main(argv=None):
                     help="--families: fit without the source's jaw prior (the fit before issue #13's jaw prior)")
     ap.add_argument("--symmetric", choices=("off", "auto", "on"), default="off",
                     help="--families: the symmetric fit of autobones.rig_transfer.symmetry (default off)")
+    ap.add_argument("--far-field", choices=("spline", "local"), default="local",
+                    help="--families: the warp the fit starts from: local (the landmarks' spline near them, their "
+                         "affine map far from them: what transfer uses on a human face; default) or spline")
     args = ap.parse_args(argv)
     if args.families:
         split = lambda v: [None if x == "neutral" else x for x in v.split(",")] if v else None  # noqa: E731
         return families(args.quick, jaw=not args.no_jaw_prior, symmetric=args.symmetric,
                         prior=args.expression_prior, ids=split(args.ids), exprs=split(args.expressions),
-                        variants=split(args.variants))
+                        variants=split(args.variants), far_field=args.far_field)
     mesh = {h: load_mesh(DATA / "ict" / f"{h}.obj") for h in HEADS}
     lms = {h: json.loads((DATA / "ict" / f"{h}.landmarks.json").read_text())["landmarks"] for h in HEADS}
     F = mesh[HEADS[0]][1]

@@ -75,7 +75,9 @@ def main(argv=None):
     for ident in ids:
         Vn = shapes["neutral"].astype(np.float64) + shapes[f"identity/{ident}"]
         lm_n = {n: lbary[i] @ Vn[F[lface[i]]] for i, n in enumerate(names)}
-        P_n, _ = _landed(Vn, F, lm_n, True)
+        # the neutral head fitted the same way as the expressive one it is compared with (without the
+        # expression fit a face gets the plain spline, with it the local warp: mixing the two is a slide)
+        P_n = {fit: _landed(Vn, F, lm_n, fit)[0] for fit in (False, True)}
         exex = np.linalg.norm(lm_n["exocanthion_l"] - lm_n["exocanthion_r"])
         for expr in EXPRESSIONS:
             Ve = Vn + shapes[f"expression/{expr}"]
@@ -87,7 +89,7 @@ def main(argv=None):
                     P_e, record = _landed(VT, FT, lm_e, fit)
                     if variant != "as is":   # onto the original expressive surface first
                         P_e = closest_points(P_e, Ve, F)[0]
-                    cells[fit] = (_slide(P_e, Ve, Vn, F, P_n, exex), record)
+                    cells[fit] = (_slide(P_e, Ve, Vn, F, P_n[fit], exex), record)
                 rows.append((ident, expr, variant, cells))
                 found = ", ".join(f"{k} {v:.2f}" for k, v in list(cells[True][1].get("weights", {}).items())[:3])
                 print(f"  {ident} {expr:13s} {variant:12s} slide off {cells[False][0].mean():.2f}% "

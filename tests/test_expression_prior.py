@@ -104,6 +104,24 @@ def test_a_left_out_smile_is_not_forced():
     assert not w.any() and 0.2 < details["gain"] < 0.5, details
 
 
+def test_a_left_out_smile_slides_less_from_the_local_warp(ict):
+    """The smile the space does not hold is fitted neutral; started from the landmarks' spline near them
+    and their affine map far from them (``transfer``'s warp on a human face), the face slides less than
+    from the spline, whose reach carries the mouth corners' move over the cheeks."""
+    S = ict[0]
+    truth, lm, VT, FT = _target(ict, "mouthSmileLeft")
+    src = {n: S.landmarks[n] for n in lm}
+    errors = {}
+    for far_field in ("spline", "local"):
+        details = {}
+        R = dense_correspondence(S.vertices, S.faces, VT, FT, src, lm, expressions=_left_out(ict, "mouthSmileLeft"),
+                                 details=details, far_field=far_field)[0]
+        assert details["expression"]["weights"] == {} and details["far_field"] == far_field, details
+        errors[far_field] = _error(ict, R, truth, lm)
+    (mean, p95), (mean0, p950) = errors["local"], errors["spline"]
+    assert mean < 0.8 * mean0 and p95 < 0.7 * p950, errors
+
+
 def test_the_expression_found_is_the_one_worn(ict):
     """In the space, an open jaw and a smile are found as themselves (every other weight small: the part
     of identity000 its left-out mode would explain) and a neutral identity as none."""
@@ -126,6 +144,8 @@ def test_a_neutral_real_scan_stays_neutral():
     lm = json.loads(open(data("menpo3d/james.landmarks.json")).read())["landmarks"]
     weights, details = shape_set_expression(S, V, F, lm, identity=S.identity)
     assert not any(weights.values()) and details["gain"] < 0.4, details
+    # transferred, the generic fits his closed mouth from the landmarks' local warp, and says so
+    assert autobones.transfer((V, F), lm).options["expression_fit"]["warp"] == "local"
 
 
 def test_transfer_records_and_wears_the_expression():
@@ -141,6 +161,7 @@ def test_transfer_records_and_wears_the_expression():
     record = rig.options["expression_fit"]
     assert max(record["weights"], key=record["weights"].get) == "mouthSmileLeft", record
     assert record["generic"].get("mouthSmileLeft", 0) > 0.5 and record["gain"] >= 0.4, record
+    assert record["warp"] == "local", record           # a human face: the landmarks' local warp
     off = autobones.transfer((V, F), lm, expression_fit=False)
     assert "off" in off.options["expression_fit"]
     assert not np.array_equal(off.weights, rig.weights)            # the fit did change

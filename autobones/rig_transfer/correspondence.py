@@ -113,6 +113,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
+from ..geometry.landmark_warp import LocalLandmarkWarp
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import vertex_normals
 from ..geometry.proxy import quadric_simplify
@@ -311,7 +312,7 @@ REFERENCE_FALLOFF = 0.5
 def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0, 10.0, 3.0), iterations=3,
                 landmark_weight=30.0, boundary_weight=10.0, max_angle=60.0, restrict_parts=True, exact=False, edge_reference="blend", symmetric_weight=10.0, coarse_vertices=8000,
                 fine_stages=(3.0,), fine_iterations=2, timings=None, jaw=None, details=None, symmetry=None,
-                expressions=None):
+                expressions=None, far_field="spline"):
     """Deform the source surface onto the target (TPS, then staged least squares).
 
     Parameters
@@ -380,6 +381,12 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         weights, on top of the jaw prior's opening), or the weights the target seems to wear
         (solved, :func:`~autobones.rig_transfer.expression_prior.fit_expression`), before the warp;
         ``details['expression']`` says which. None: the neutral source.
+    far_field : {"spline", "local"}
+        The warp the fit starts from: Bookstein's spline of the landmarks everywhere (default), or that
+        spline near the landmarks and their affine map far from them
+        (:class:`~autobones.geometry.landmark_warp.LocalLandmarkWarp`: what moves a few landmarks, a
+        smile the expression space does not hold, then does not bend the ears, scalp and neck).
+        ``details['far_field']`` says which.
 
     Returns
     -------
@@ -404,13 +411,17 @@ def fit_surface(V_src, F_src, V_tgt, F_tgt, lm_src, lm_tgt, stages=(100.0, 30.0,
         raise AutobonesError("stages must be positive shape weights and iterations >= 1")
     if edge_reference not in ("source", "tps", "blend"):
         raise AutobonesError(f"edge_reference must be 'blend', 'source' or 'tps', got {edge_reference!r}")
+    if far_field not in ("spline", "local"):
+        raise AutobonesError(f"far_field must be 'spline' or 'local', got {far_field!r}")
     if jaw is not None:
         V_src, P = open_source_jaw(V_src, F_src, P, Q, jaw, details)
     elif details is not None:
         details["jaw_deg"] = 0.0
     if expressions is not None:
         V_src, P = pose_source_expression(V_src, F_src, P, Q, V_tgt, F_tgt, expressions, details)
-    tps = ThinPlateSpline().fit(P, Q)
+    tps = (LocalLandmarkWarp() if far_field == "local" else ThinPlateSpline()).fit(P, Q)
+    if details is not None:
+        details["far_field"] = far_field
     t1 = time.perf_counter()
     args = (landmark_weight, boundary_weight, max_angle, restrict_parts, exact, edge_reference, symmetric_weight,
             symmetry, {})

@@ -34,7 +34,7 @@ import numpy as np
 
 from .correspondence import dense_correspondence
 from .joints import anchor_joints, face_points
-from .expression_prior import shape_set_expression
+from .expression_prior import MAX_MISFIT, shape_set_expression
 from .jaw_prior import jaw_prior
 from .eyes import bind_eyeballs, centre_eye_bones
 from .jaw import repair_jaw_weights
@@ -276,7 +276,7 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
     # the ARKit shape set's own correspondence needs only the head and its landmarks: fitted on the
     # second core while this thread fits the generic rig (most of both runs outside the GIL)
     pending = _in_background(shapes, V, F, lm) if arkit else None
-    P, ok, fit_details = _fit(generic, rig, V, F, src, dst, space, found, fit_options, timings)
+    P, ok, fit_details = _fit(generic, rig, V, F, src, dst, space, (found, found_details), fit_options, timings)
     if details is not None:
         details.update(correspondence=P, reliable=ok)
     lap("correspond")
@@ -431,17 +431,26 @@ def _in_background(shapes, V, F, lm):
     return pending
 
 
-def _fit(generic, rig, V, F, src, dst, space, found, fit_options, timings):
+def _fit(generic, rig, V, F, src, dst, space, expression, fit_options, timings):
     """The dense correspondence of the generic skin on the head: ``P`` (n_rig, 3) each generic vertex's
     point on the head (input frame), ``ok`` (n_rig,) bool reliable, and the fit's details; its
-    timings go into ``timings`` as ``fit_*``. ``fit_options`` (the caller's, completed here: the jaw
-    prior and the expression worn unless given) is changed in place."""
+    timings go into ``timings`` as ``fit_*``. ``expression``: (found, record), the expression the head
+    seems to wear and the solve's record (:func:`_head_expression`). ``fit_options`` (the caller's,
+    completed here: the jaw prior, the expression worn and the warp's far field unless given) is
+    changed in place."""
+    found, solved = expression
     if "jaw" not in fit_options:
         # the generic's jaw opened as far as the head's landmarks say before the warp: a smooth warp
         # cannot open a mouth, and the chin and neck slid without it (benchmarks/correspondence.py)
         fit_options["jaw"] = generic_jaw_prior(generic, rig)
     if "expressions" not in fit_options:
         fit_options["expressions"] = {**space, "weights": found} if any(found.values()) else None
+    if "far_field" not in fit_options and space is not None and solved.get("misfit", np.inf) <= MAX_MISFIT:
+        # a face the expression space fits: the landmarks' spline only near them, their affine map far
+        # from them, whatever it wears (the same warp for a person's every expression, so the generic
+        # lands alike on each); what the space does not explain (a smile unlike its own) then stays
+        # local instead of bending the ears, scalp and neck (benchmarks/expression_fit.py)
+        fit_options["far_field"] = "local"
     fit_timings, fit_details = {}, {}
     P, _, _, ok = dense_correspondence(generic.vertices, generic.faces, V, F, src, dst, timings=fit_timings,
                                        details=fit_details, **fit_options)
@@ -462,7 +471,8 @@ def _face_labels(fields, generic, n):
 def _expression_record(found, fit_details, asked, space, detected):
     """The sidecar's ``expression_fit``: the expression the head seems to wear (``weights`` {name:
     weight} over 0.05, empty for a neutral head; ``gain``: the share of the neutral skin's misfit it
-    removes) and the weights the generic skin wore in its fit (``generic``), or why it did not run."""
+    removes), the weights the generic skin wore in its fit (``generic``) and the warp its fit started
+    from (``warp``: ``local`` on a face the space fits, else ``spline``), or why it did not run."""
     if not asked:
         return {"off": "expression_fit=False (--no-expression-fit)"}
     if detected:
@@ -473,7 +483,7 @@ def _expression_record(found, fit_details, asked, space, detected):
                        "or the fit was given one"}
     return {"weights": found.get("weights", {}), "gain": found.get("gain", 0.0),
             **({"note": found["note"]} if "note" in found else {}), "solved_on": "the ARKit shape set's skin",
-            "generic": fit_details.get("expression", {}).get("weights", {})}
+            "generic": fit_details.get("expression", {}).get("weights", {}), "warp": fit_details.get("far_field")}
 
 
 def _carry_attributes(generic, P, ok, V, F, skeleton, under):
