@@ -49,6 +49,8 @@ class LocalLandmarkWarp:
         The landmarks' least-squares affine map, the warp far from them.
     radius_ : float
         The source landmarks' RMS distance from their centroid (source units).
+    tree_ : scipy.spatial.cKDTree
+        The source landmarks, for the distance to the nearest one.
     """
 
     def __init__(self, core=CORE, width=WIDTH):
@@ -68,14 +70,15 @@ class LocalLandmarkWarp:
         self.far_ = np.linalg.lstsq(H, Q, rcond=None)[0]
         self.affine_ = self.spline_.affine_
         self.radius_ = float(np.sqrt(np.mean(np.sum((P - P.mean(axis=0)) ** 2, axis=1))))
-        self._tree = cKDTree(P)
+        self.tree_ = cKDTree(P)
         return self
 
     def blend(self, X):
-        """The spline's share at each point of ``X`` (n, 3), source frame: (n,) in (0, 1], 1 near a landmark."""
+        """The spline's share at each point of ``X`` (n, 3), source frame: (n,) in [0, 1], 1 within ``core``
+        of a landmark (0 where the Gaussian underflows, far away)."""
         if not hasattr(self, "spline_"):
             raise AutobonesError("LocalLandmarkWarp used before fit")
-        d, _ = self._tree.query(as_points(X, "points"))
+        d, _ = self.tree_.query(as_points(X, "points"))
         over = np.maximum(d / max(self.radius_, 1e-300) - self.core, 0.0) / self.width
         return np.exp(-0.5 * over ** 2)
 
