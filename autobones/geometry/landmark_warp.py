@@ -29,6 +29,14 @@ CORE = 0.5
 WIDTH = 0.5
 
 
+def nearest_landmark(P, X):
+    """How far each point of ``X`` (n, 3) lies from the nearest landmark of ``P`` (k, 3), both in one frame
+    and unit: ``d`` (n,), and the landmarks' RMS distance from their centroid ``r`` (float), the scale the
+    fit's reach near the landmarks is measured in."""
+    r = np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())
+    return cKDTree(P).query(X)[0], r
+
+
 class LocalLandmarkWarp:
     """The landmarks' spline near them, their least-squares affine map far from them (module doc).
 
@@ -49,8 +57,6 @@ class LocalLandmarkWarp:
         The landmarks' least-squares affine map, the warp far from them.
     radius_ : float
         The source landmarks' RMS distance from their centroid (source units).
-    tree_ : scipy.spatial.cKDTree
-        The source landmarks, for the distance to the nearest one.
     """
 
     def __init__(self, core=CORE, width=WIDTH):
@@ -69,8 +75,7 @@ class LocalLandmarkWarp:
         H = np.c_[np.ones(len(P)), P]
         self.far_ = np.linalg.lstsq(H, Q, rcond=None)[0]
         self.affine_ = self.spline_.affine_
-        self.radius_ = float(np.sqrt(np.mean(np.sum((P - P.mean(axis=0)) ** 2, axis=1))))
-        self.tree_ = cKDTree(P)
+        self.radius_ = float(nearest_landmark(P, P[:1])[1])
         return self
 
     def blend(self, X):
@@ -78,7 +83,7 @@ class LocalLandmarkWarp:
         of a landmark (0 where the Gaussian underflows, far away)."""
         if not hasattr(self, "spline_"):
             raise AutobonesError("LocalLandmarkWarp used before fit")
-        d, _ = self.tree_.query(as_points(X, "points"))
+        d, _ = nearest_landmark(self.spline_.control_points_, as_points(X, "points"))
         over = np.maximum(d / max(self.radius_, 1e-300) - self.core, 0.0) / self.width
         return np.exp(-0.5 * over ** 2)
 

@@ -113,7 +113,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
-from ..geometry.landmark_warp import LocalLandmarkWarp
+from ..geometry.landmark_warp import LocalLandmarkWarp, nearest_landmark
 from ..geometry.laplacian import factor_spd
 from ..geometry.normals import vertex_normals
 from ..geometry.proxy import quadric_simplify
@@ -206,8 +206,7 @@ def _source_terms(V_src, F_src, X, tps, P, edge_reference):
     if edge_reference == "blend":
         # near the landmarks the warp's edges (turned into the source edge's normal frame, so one
         # R_ij turns both): they carry the stretch an expression or a different face puts there
-        r = np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())
-        d = cKDTree(P).query(0.5 * (V_src[E[:, 0]] + V_src[E[:, 1]]))[0]
+        d, r = nearest_landmark(P, 0.5 * (V_src[E[:, 0]] + V_src[E[:, 1]]))
         alpha = np.exp(-(np.maximum(d - REFERENCE_CORE * r, 0.0) / (REFERENCE_FALLOFF * r)) ** 2)[:, None]
         warped = rotate_between(edge_normals(vertex_normals(X, F_src)), n_edge_src, X[E[:, 0]] - X[E[:, 1]])
         edge_src = (1.0 - alpha) * edge_src + alpha * warped

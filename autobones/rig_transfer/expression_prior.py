@@ -44,6 +44,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
+from ..geometry.landmark_warp import nearest_landmark
 from ..geometry.normals import vertex_normals
 from ..geometry.rotations import similarity
 from ..geometry.topology import mesh_parts
@@ -117,8 +118,8 @@ def _sample(V_src, F_src, P, basis):
     part = mesh_parts(len(V_src), F_src)
     skin = part == np.argmax(np.bincount(part))
     motion = np.linalg.norm(basis, axis=2).max(axis=0)
-    r = np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())
-    near = cKDTree(P).query(V_src)[0] < r
+    d, r = nearest_landmark(P, V_src)
+    near = d < r
     idx = np.flatnonzero(skin & ((motion > 0.02 * motion.max()) | near))
     return idx[::max(1, -(-len(idx) // SAMPLE))]
 
