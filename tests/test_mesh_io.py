@@ -34,6 +34,40 @@ def test_quads_are_fanned_into_triangles(tmp_path):
     assert F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 1, 4], [4, 3, 2], [0, 3, 4]]
 
 
+QUAD = ["v 0 0 0", "v 1 0 0", "v 1 1 0", "v 0 1 0", "v 0 0 1", "f 1 2 3 4", "f 1 2 5", "f 1 4 5"]
+
+
+@pytest.mark.parametrize("spell", ["tab after the keyword", "tabs between numbers", "indented",
+                                   "some lines indented", "byte order mark", "continued lines"])
+def test_obj_lines_are_read_whatever_their_whitespace(tmp_path, spell):
+    """Every ``v`` and ``f`` line counts however an exporter spaces it: a line skipped for its whitespace
+    left half a head's triangles out of the rig, with no word said."""
+    lines = list(QUAD)
+    if spell == "tab after the keyword":
+        lines = [ln.replace(" ", "\t", 1) for ln in lines]
+    elif spell == "tabs between numbers":
+        lines = [ln.replace(" ", "\t") if i % 2 else ln for i, ln in enumerate(lines)]
+    elif spell == "indented":
+        lines = ["  " + ln for ln in lines]
+    elif spell == "some lines indented":
+        lines = [" \t" + ln if i in (1, 6) else ln for i, ln in enumerate(lines)]
+    elif spell == "continued lines":
+        lines = [ln.replace(" ", " \\\n", 1) if ln.startswith("f") else ln for ln in lines]
+    text = "\n".join(lines) + "\n"
+    p = tmp_path / "q.obj"
+    p.write_bytes((b"\xef\xbb\xbf" if spell == "byte order mark" else b"") + text.encode())
+    V, F = load_mesh(p)
+    assert V.shape == (5, 3) and V[2].tolist() == [1, 1, 0]
+    assert F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 1, 4], [0, 3, 4]]
+
+
+def test_obj_token_that_is_not_a_number_is_named_with_its_line(tmp_path):
+    p = tmp_path / "bad.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x3\n")
+    with pytest.raises(AutobonesError, match=r"bad.obj:4: 'x3' is not a vertex index"):
+        load_mesh(p)
+
+
 def test_ply_keeps_vertex_order():
     V, F = load_mesh(data("menpo3d/template.ply"))
     assert V.shape == (53349, 3) and F.shape == (106111, 3)

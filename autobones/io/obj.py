@@ -33,10 +33,14 @@ def read_obj(path):
     ------
     AutobonesError
         A ``v`` line with fewer than 3 coordinates, face index 0, a face of fewer than 3
-        vertices, or no ``v`` line at all. Unparsable numbers raise ValueError.
+        vertices, a token that is not a number, or no ``v`` line at all.
     """
     with open(path, "rb") as fh:
-        data = fh.read()
+        # a tab separates tokens as a space does (exporters write ``v\t1\t2\t3``): read as one, no line is
+        # skipped for its whitespace
+        data = fh.read().removeprefix(b"\xef\xbb\xbf").replace(b"\t", b" ")  # a UTF-8 mark before the first line
+    if b"\\" in data:
+        data = re.sub(rb"\\ *\r?\n", b" ", data)  # a backslash at a line's end continues it
     try:
         return _read_blocks(data)
     except Exception:  # noqa: BLE001
@@ -62,6 +66,8 @@ def _read_blocks(data):
     keep = ends - starts >= 2
     starts, ends = starts[keep], ends[keep]
     c0, c1 = buf[starts], buf[starts + 1]
+    if (c0 == ord(" ")).any():
+        raise _Unusual  # indented lines: the line reader takes each line's first token
     kind = np.where(c1 != ord(" "), 0, np.where(c0 == ord("v"), 1, np.where(c0 == ord("f"), 2, 0)))
     if not (kind == 1).any():
         raise _Unusual
@@ -120,15 +126,16 @@ def _read_lines(path, data):
     """One Python step per line: the reference behaviour, with line numbers in its errors."""
     verts, faces = [], []
     for lineno, raw in enumerate(data.split(b"\n"), 1):
-        if raw[:2] == b"v ":
-            parts = raw.split()
+        parts = raw.split()
+        key = parts[0] if parts else b""
+        if key == b"v":
             if len(parts) < 4:
                 raise AutobonesError(f"{path}:{lineno}: vertex line needs 3 coordinates")
-            verts.append((float(parts[1]), float(parts[2]), float(parts[3])))
-        elif raw[:2] == b"f ":
+            verts.append(tuple(_number(float, t, path, lineno) for t in parts[1:4]))
+        elif key == b"f":
             idx = []
-            for tok in raw.split()[1:]:
-                i = int(tok.split(b"/")[0])
+            for tok in parts[1:]:
+                i = _number(int, tok.split(b"/")[0], path, lineno)
                 # OBJ is 1-based; negative indices count back from the last vertex so far
                 idx.append(i - 1 if i > 0 else len(verts) + i)
                 if i == 0:
@@ -140,6 +147,14 @@ def _read_lines(path, data):
     if not verts:
         raise AutobonesError(f"{path}: no vertex lines ('v x y z') found; not an OBJ mesh")
     return np.array(verts, dtype=np.float64), np.array(faces, dtype=np.int64).reshape(-1, 3)
+
+
+def _number(kind, token, path, lineno):
+    try:
+        return kind(token)
+    except ValueError:
+        what = "a coordinate" if kind is float else "a vertex index"
+        raise AutobonesError(f"{path}:{lineno}: {token.decode('latin-1')!r} is not {what}") from None
 
 
 def write_obj(path, V, F, comment=None):
