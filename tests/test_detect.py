@@ -192,6 +192,16 @@ def test_scan_landmarks_match_the_published_ones():
     assert len(err) >= 25 and np.mean(list(err.values())) < 4.0 and max(err.values()) < 10.0, err
 
 
+def test_a_leftover_vertex_far_away_does_not_hide_the_face():
+    """A vertex no triangle uses, 20 head sizes off, framed into the pictures shrank the face to a few pixels:
+    "no face found" on a head whose file landmarks transfer took."""
+    V, F = load_mesh(data("menpo3d/james.obj"))
+    far = np.vstack([V, V.mean(axis=0) + 20 * np.ptp(V, axis=0)])
+    found = autobones.detect_landmarks((far, F))
+    err = errors(found, read_landmarks(data("menpo3d/james.landmarks.json")))
+    assert len(err) >= 25 and np.mean(list(err.values())) < 4.0, err
+
+
 def test_detected_landmarks_are_on_the_surface_and_left_is_left(ict):
     from autobones.geometry.closest import closest_points
 

@@ -522,3 +522,16 @@ def test_name_index_is_the_position_in_names():
     from autobones.io.landmark_names import NAME_INDEX
 
     assert [NAMES[i] for i in NAME_INDEX.values()] == list(NAME_INDEX) == list(NAMES)
+
+
+def test_a_vertex_no_triangle_uses_is_no_part_of_the_head(tmp_path):
+    """An exporter's leftover vertex far away made the head 20 times its size: a whole head's landmarks were
+    refused as "gathered within 0.0086 head sizes", and the automatic landmarks' pictures framed it (no face)."""
+    from autobones.io.landmark_checks import landmark_problems
+
+    p = data("menpo3d/james.obj")
+    V, F = load_mesh(p)
+    lm = read_landmarks(p.with_suffix(".landmarks.json"))
+    far = np.vstack([V, V.mean(axis=0) + 20 * np.ptp(V, axis=0)])
+    assert len(validate_landmarks(lm, far, F)) == len(lm)
+    assert not landmark_problems(lm, far, F)["set"]

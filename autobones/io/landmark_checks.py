@@ -14,6 +14,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import AutobonesError, counted
+from ..geometry.topology import used_vertices
 from .landmark_names import BILATERAL, NAME_INDEX, NAMES
 
 # Global scales tried when landmarks miss the surface, and what each one means.
@@ -52,7 +53,7 @@ def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, sour
         What to call the landmarks in messages, usually the file name.
     max_off_surface : float
         Largest distance from the surface, in head sizes (the largest
-        bounding-box extent of ``V``).
+        bounding-box extent of the vertices ``F`` uses).
 
     Returns
     -------
@@ -90,7 +91,7 @@ def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, sour
             raise TypeError("validate_landmarks: V and F go together")
         V = np.ascontiguousarray(V, dtype=np.float64)
         F = np.ascontiguousarray(F, dtype=np.int64)
-        head = float((V.max(axis=0) - V.min(axis=0)).max())
+        head = head_extent(V, F)
     _check_spread(P, names, head, source)
     if head is not None:
         _check_speck(P, V, F, head, source, max_off_surface)
@@ -131,7 +132,7 @@ def landmark_problems(landmarks, V, F, frame=None, min_count=10, max_off_surface
     P = np.array([clean[n] for n in names])
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
-    head = float((V.max(axis=0) - V.min(axis=0)).max())
+    head = head_extent(V, F)
     for i, j in same_point_pairs(P, head):
         add(names[i], f"at the same point as {names[j]}")
         add(names[j], f"at the same point as {names[i]}")
@@ -265,6 +266,14 @@ def unit_hint(P, far, V, F, head, max_off):
         if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
             best = (near, scale, meaning)
     return None if best is None else best[1:]
+
+
+def head_extent(V, F):
+    """The largest bounding-box extent (float, mesh units) of the vertices of ``V`` (n, 3) that triangles of
+    ``F`` (m, 3) use: a vertex no triangle uses (an exporter's leftover far away) is no part of the head,
+    and counted it made a whole head's landmarks look gathered in a speck."""
+    used = V[used_vertices(F, len(V))] if len(F) else V
+    return float((used.max(axis=0) - used.min(axis=0)).max())
 
 
 def rms_spread(P, head):

@@ -43,6 +43,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
+from ..geometry.topology import used_vertices
 from ..geometry.winding import outward_faces
 from ..io.landmark_names import NAMES, mirror_name
 from ..io.mesh import resolve_mesh
@@ -117,6 +118,17 @@ class DetectedLandmarks(dict):
 # the detector
 
 
+def _used_only(V, F):
+    """``(V, F)`` without the vertices no triangle uses, ``F`` renumbered: a leftover vertex far away is not
+    pictured, and framed into the pictures it shrank the face to a few pixels ("no face found")."""
+    used = used_vertices(F, len(V))
+    if len(used) == len(V) or not len(F):
+        return V, F
+    renumber = np.zeros(len(V), dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return V[used], renumber[F]
+
+
 @dataclass
 class LandmarkDetector:
     """Automatic contract landmarks for human heads.
@@ -164,7 +176,7 @@ class LandmarkDetector:
         """Landmarks of the mesh ``(V, F)``; ``frame`` from :func:`autobones.orient.detect_frame`
         (found when None, with ``up`` and ``front`` as given). Returns :class:`DetectedLandmarks`;
         raises AutobonesError when no face is found."""
-        V = np.asarray(V, dtype=np.float64)
+        V, F = _used_only(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64))
         F = outward_faces(V, F)[0]   # the pictures are shaded by the normals: an inside-out head reads dark
         # the frame from the whole mesh (a clustered copy's rim and flat cut read differently), found
         # on a second thread while the pictured copy is made: both are mostly numpy outside the GIL;
