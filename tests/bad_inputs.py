@@ -177,6 +177,8 @@ def mesh_cases():
     add("scale_1e6.obj", obj_bytes(V * 1e6, F), "ok", why="any unit: the pipeline works in head sizes")
     add("far_from_origin.obj", obj_bytes(V + [3.0e4, -2.0e4, 1.0e4], F), "ok",
         why="10^4 head sizes from the origin: float64 keeps the shape")
+    add("too_far_from_origin.obj", obj_bytes(V + [3.0e6, 0.0, 0.0], F), "failed", "from the origin",
+        why="10^6 head sizes from the origin: a glb's float32 positions would snap its vertices together")
     add("mtllib_outside.obj", obj_bytes(V, F, header="mtllib ../../../../etc/passwd\nusemtl x"), "ok",
         why="mtllib is never opened: the OBJ reader reads only v and f lines")
     return out

@@ -153,7 +153,7 @@ def test_library_refuses_a_bad_seed_with_its_error_type(seed):
 
 
 NEW_BAD = ["stray_triangle_1e9.obj", "stray_triangle_1e7.obj", "spike_1e3.obj", "spike_1e5.obj",
-           "collinear_strip.obj", "random_stl.stl", "random_off.off"]
+           "collinear_strip.obj", "random_stl.stl", "random_off.off", "too_far_from_origin.obj"]
 
 
 @pytest.mark.parametrize("name", NEW_BAD)

@@ -6,7 +6,7 @@ import pytest
 import trimesh
 
 from autobones.errors import AutobonesError
-from autobones.io.mesh import load_mesh
+from autobones.io.mesh import check_mesh, load_mesh
 
 from shared_data import data
 
@@ -460,3 +460,14 @@ def test_several_heads_in_one_file_are_refused(tmp_path):
                 check_mesh(V2, F2, name="lineup")
         else:
             assert check_mesh(V2, F2, name="lineup")[0].shape == (2 * len(V), 3)
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6])
+def test_a_head_too_far_from_the_origin_for_float32_is_refused_with_the_cure(tmp_path, offset):
+    """A 0.2 m head 1e6 m out was written to the glb on a 0.06 m grid (31 distinct positions of 8,838) with
+    exit 0; 1e4 m out, 1,969 vertices snapped together. 1e3 m out it rounds by 3 % of an edge: rigged."""
+    V, F = load_mesh(data("menpo3d/james.obj"))
+    V = (V - V.mean(axis=0)) * (0.2 / np.ptp(V, axis=0).max())
+    with pytest.raises(AutobonesError, match=r"from the origin.*snap together.*move it near the origin"):
+        check_mesh(V + offset, F, "far.obj")
+    check_mesh(V + 1e3, F, "near.obj")
