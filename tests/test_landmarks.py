@@ -535,3 +535,16 @@ def test_a_vertex_no_triangle_uses_is_no_part_of_the_head(tmp_path):
     far = np.vstack([V, V.mean(axis=0) + 20 * np.ptp(V, axis=0)])
     assert len(validate_landmarks(lm, far, F)) == len(lm)
     assert not landmark_problems(lm, far, F)["set"]
+
+
+@pytest.mark.parametrize("factor", [2.54, 1 / 25.0, 25.0])
+def test_no_units_hint_for_a_scale_that_is_not_a_power_of_ten(factor):
+    """Landmarks in centimetres on a mesh in inches (2.54) were called "millimetres for a mesh in centimetres":
+    scaled by 0.1 they came near, not onto, the surface. A hint is given only where the scale puts them on it."""
+    p = data("menpo3d/james.obj")
+    V, F = load_mesh(p)
+    lm = read_landmarks(p.with_suffix(".landmarks.json"))
+    msg = _error(validate_landmarks, {n: np.asarray(x) * factor for n, x in lm.items()}, V, F)
+    assert "wrong units" not in msg, msg
+    msg = _error(validate_landmarks, {n: np.asarray(x) * 0.001 for n, x in lm.items()}, V, F)
+    assert "metres for a mesh in millimetres" in msg

@@ -30,6 +30,8 @@ _UNIT_HINTS = (
 # may give: the 20 landmark files of the shared data measure 0.14 (ICT, the beast) to 0.40 (the penguin);
 # a face's landmarks on a whole body would be near 0.03
 MIN_SPREAD, MAX_SPREAD = 0.02, 3.0
+# head sizes: within this of the surface once scaled, landmarks are on it and a units hint names the scale
+HINT_OFF = 0.005
 
 
 def validate_landmarks(landmarks, V=None, F=None, frame=None, min_count=10, source="landmarks",
@@ -255,14 +257,17 @@ def unit_hint(P, far, V, F, head, max_off):
 
     A scale that shrinks the set to a speck (or spreads it over many heads) is no hint: landmarks
     moved 500 units off a head, scaled by 0.001, all fall within half a unit of the origin, which
-    may be near the surface, and were called millimetres."""
+    may be near the surface, and were called millimetres. Nor is a scale that puts them merely near
+    the surface: on the surface means within :data:`HINT_OFF` head sizes (landmarks in centimetres on
+    a mesh in inches, scaled by 0.1, lay within 0.016 of Lee Perry-Smith's face and were called
+    millimetres; the right scale puts a file's landmarks within 1e-4)."""
     best = None
     for scale, meaning in _UNIT_HINTS:
         with np.errstate(over="ignore", invalid="ignore"):
             scaled = P * scale
         if not MIN_SPREAD <= rms_spread(scaled, head) <= MAX_SPREAD:
             continue
-        near = int((surface_offsets(scaled, V, F, head) <= max_off).sum())
+        near = int((surface_offsets(scaled, V, F, head) <= min(max_off, HINT_OFF)).sum())
         if near > int((~far).sum()) and near >= 0.8 * len(P) and (best is None or near > best[0]):
             best = (near, scale, meaning)
     return None if best is None else best[1:]
