@@ -58,6 +58,11 @@ def transfer(head, landmarks=None, rig=None, up=None, front=None, control_points
 def place(mesh=None, density="medium", up=None, front=None, random_state=0, landmarks=None, rig=None):
     _check_landmarks_argument(landmarks, "landmarks")
     _check_rig_argument(rig)
+    if rig is not None and landmarks is None:
+        # the generic rig is used only to transfer the neck, head, jaw and eyes from landmarks: taken
+        # silently, a rig given alone looked used
+        raise AutobonesError("rig= (--rig) is the generic rig place transfers from with landmarks=; give "
+                             "landmarks= (--landmarks FILE) too, or leave the rig out")
     _check_axis(up, "up")
     _check_axis(front, "front")
     return _place(mesh, density, up, front, random_state, landmarks, rig)

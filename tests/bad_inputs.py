@@ -312,6 +312,8 @@ def command_cases():
         "a value outside the choices")
     add("argparse_missing_argument", ["animate", "{rig}", "-o", "{out}.glb"], None, "--capture",
         "a required option missing")
+    add("place_rig_without_landmarks", ["place", "{head}", "-o", "{out}.glb", "--rig", "{head}"], None, "--landmarks",
+        "place --rig without --landmarks: the rig is used only with landmarks (was: ignored, exit 0)")
     add("no_command", [], None, "no command given", "autobones alone: one line on stderr, exit 2 (was: the help on "
         "stdout, exit 2); autobones --help prints the help, exit 0")
     tampered_cases(add)
