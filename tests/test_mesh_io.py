@@ -113,6 +113,18 @@ def test_bad_files_raise_one_clear_error(tmp_path, name):
     assert name in msg and "\n" not in msg
 
 
+@pytest.mark.parametrize("ext", [".ply", ".off"])
+def test_a_text_mesh_cut_short_is_called_cut_short(tmp_path, ext):
+    """An ASCII PLY or OFF cut inside a face row was refused with numpy's own words ("setting an array element
+    with a sequence"), which name no cause."""
+    p = tmp_path / f"s{ext}"
+    trimesh.creation.icosphere(2).export(p, **({"encoding": "ascii"} if ext == ".ply" else {}))
+    text = p.read_bytes()
+    p.write_bytes(text[: int(len(text) * 0.9)])
+    with pytest.raises(AutobonesError, match="cut short or corrupt|truncated or corrupt"):
+        load_mesh(p)
+
+
 def test_missing_file():
     with pytest.raises(AutobonesError, match="no such file"):
         load_mesh("/nonexistent/head.obj")

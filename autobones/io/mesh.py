@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import struct
 
 import numpy as np
@@ -77,12 +78,16 @@ def load_mesh(path, strays=False):
             if ext in _SNIFF:
                 _SNIFF[ext](path, size)
             V, F = _read_trimesh(path)
+            _check_declared(path, ext, V, F)
     except AutobonesError:
         raise
     except Exception as exc:  # any parser failure is the file's fault, not ours
         text = str(exc)
-        if any(k in text for k in ("unexpected length", "reshape", "buffer is smaller", "truncated")):
+        if any(k in text for k in ("unexpected length", "reshape", "buffer is smaller", "truncated",
+                                   "not expected length")):
             why = "the file is shorter than its header says: truncated or corrupt"
+        elif "with a sequence" in text or "inhomogeneous" in text:  # numpy on rows of different lengths
+            why = "its rows hold different numbers of values: the file is cut short or corrupt"
         elif isinstance(exc, (UnicodeError, ImportError)):
             # trimesh guesses the encoding of text that is not UTF-8 with an optional module:
             # either way the file is not the text its format is
@@ -353,6 +358,33 @@ def _sniff_off(path, size):
 
 
 _SNIFF = {".stl": _sniff_stl, ".off": _sniff_off}
+
+
+def _declared(path, ext):
+    """(vertices, faces) a PLY or OFF header declares, or None (binary headers read as latin-1 text)."""
+    with open(path, "rb") as fh:
+        text = fh.read(4096).decode("latin-1")
+    if ext == ".ply":
+        head = text.split("end_header", 1)[0]
+        found = dict(re.findall(r"^element\s+(vertex|face)\s+(\d+)", head, flags=re.M))
+        return (int(found["vertex"]), int(found["face"])) if len(found) == 2 else None
+    words = " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    if ext == ".off" and len(words) >= 3 and words[0].upper().endswith("OFF") and words[1].isdigit() \
+            and words[2].isdigit():
+        return int(words[1]), int(words[2])
+    return None
+
+
+def _check_declared(path, ext, V, F):
+    """AutobonesError when an ASCII PLY or OFF holds fewer vertices or faces than its header declares: cut
+    short between rows, trimesh reads what is there (241 of an icosphere's 320 faces, with exit 0)."""
+    if ext not in (".ply", ".off"):
+        return
+    declared = _declared(path, ext)
+    # a polygon fans into two or more triangles: fewer triangles than declared faces is always short
+    if declared is not None and (len(V) < declared[0] or len(F) < declared[1]):
+        raise AutobonesError(f"{path}: holds {len(V)} vertices and {len(F)} faces of the {declared[0]} and "
+                             f"{declared[1]} its header declares: the file is cut short or corrupt")
 
 
 def _read_trimesh(path):
