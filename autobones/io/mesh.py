@@ -383,8 +383,9 @@ def _check_declared(path, ext, V, F):
     declared = _declared(path, ext)
     # a polygon fans into two or more triangles: fewer triangles than declared faces is always short
     if declared is not None and (len(V) < declared[0] or len(F) < declared[1]):
-        raise AutobonesError(f"{path}: holds {len(V)} vertices and {len(F)} faces of the {declared[0]} and "
-                             f"{declared[1]} its header declares: the file is cut short or corrupt")
+        raise AutobonesError(f"{path}: holds {counted(len(V), 'vertex', 'vertices')} and {counted(len(F), 'face')} "
+                             f"of the {declared[0]} and {declared[1]} its header declares: the file is cut short "
+                             "or corrupt")
 
 
 def _read_trimesh(path):
