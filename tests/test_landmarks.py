@@ -548,3 +548,16 @@ def test_no_units_hint_for_a_scale_that_is_not_a_power_of_ten(factor):
     assert "wrong units" not in msg, msg
     msg = _error(validate_landmarks, {n: np.asarray(x) * 0.001 for n, x in lm.items()}, V, F)
     assert "metres for a mesh in millimetres" in msg
+
+
+@pytest.mark.parametrize("far", [1e6, 1e20])
+def test_one_landmark_mistyped_far_away_is_named(far):
+    """One coordinate typed 1e20 made every other pair "at the same point" (the tolerance scaled with the
+    largest coordinate); the landmark is named instead. A head's farthest landmark lies under 5 median
+    distances out (the 31 landmark files of the shared data and the tests)."""
+    p = data("menpo3d/james.obj")
+    lm = read_landmarks(p.with_suffix(".landmarks.json"))
+    bad = {**lm, "pronasale": np.full(3, far)}
+    msg = _error(validate_landmarks, bad)
+    assert "pronasale lies" in msg and "same point" not in msg, msg
+    assert len(validate_landmarks(lm)) == len(lm)

@@ -193,6 +193,11 @@ def _values(landmarks, source):
 
 
 def _check_spread(P, names, head, source):
+    far = strayed(P)
+    if far is not None:
+        i, reach = far
+        raise AutobonesError(f"{source}: {names[i]} lies {reach:.2g} times the other landmarks' spread from their "
+                             f"centre ({P[i].tolist()}); a coordinate mistyped or in another unit?")
     m = float(np.abs(P).max())
     Q = P / m if m > 0 else P
     spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
@@ -208,6 +213,26 @@ def _check_spread(P, names, head, source):
     if on_one_line(P):
         raise AutobonesError(f"{source}: all {len(P)} landmarks lie on one line; "
                              f"they must spread over the face (check for a dropped coordinate)")
+
+
+# a landmark farther than this many times the set's median distance from its median point is no landmark of
+# that head: a coordinate mistyped (1e20), which the checks after read as every other pair "at the same point"
+# or all "on one line" (their tolerances scale with the largest coordinate); a head's farthest landmark lies
+# 1.5-3 median distances out (the vertex, the menton, an animal's muzzle)
+STRAY = 100.0
+
+
+def strayed(P):
+    """(index, reach) of the point of ``P`` (k, 3) farthest from the points' median, when it lies more than
+    :data:`STRAY` times their median distance from it (``reach`` that ratio); else None."""
+    if len(P) < 4 or not np.isfinite(P).all():
+        return None
+    m = float(np.abs(P).max())
+    Q = P / m if m > 0 else P   # huge (finite) coordinates must not overflow the squares
+    d = np.linalg.norm(Q - np.median(Q, axis=0), axis=1)
+    typical = float(np.median(d))
+    i = int(np.argmax(d))
+    return (i, float(d[i] / typical)) if typical > 0 and d[i] > STRAY * typical else None
 
 
 def same_point_pairs(P, head=None):
