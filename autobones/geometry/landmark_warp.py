@@ -29,12 +29,16 @@ CORE = 0.5
 WIDTH = 0.5
 
 
+def landmark_radius(P):
+    """The landmarks' RMS distance from their centroid (float, their units) for ``P`` (k, 3): the scale the
+    fit's reach near the landmarks is measured in."""
+    return float(np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean()))
+
+
 def nearest_landmark(P, X):
     """How far each point of ``X`` (n, 3) lies from the nearest landmark of ``P`` (k, 3), both in one frame
-    and unit: ``d`` (n,), and the landmarks' RMS distance from their centroid ``r`` (float), the scale the
-    fit's reach near the landmarks is measured in."""
-    r = np.sqrt(((P - P.mean(axis=0)) ** 2).sum(axis=1).mean())
-    return cKDTree(P).query(X)[0], r
+    and unit: ``d`` (n,), and :func:`landmark_radius` of ``P`` ``r`` (float)."""
+    return cKDTree(P).query(X)[0], landmark_radius(P)
 
 
 class LocalLandmarkWarp:
@@ -75,7 +79,7 @@ class LocalLandmarkWarp:
         H = np.c_[np.ones(len(P)), P]
         self.far_ = np.linalg.lstsq(H, Q, rcond=None)[0]
         self.affine_ = self.spline_.affine_
-        self.radius_ = float(nearest_landmark(P, P[:1])[1])
+        self.radius_ = landmark_radius(P)
         return self
 
     def blend(self, X):
