@@ -9,7 +9,7 @@ from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
 from autobones.geometry.rotations import polar_rotations, rotate_between, similarity
 from autobones.geometry.smooth import ramp, smoothstep, step
-from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, weld,
+from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, submesh, weld,
                                          weld_by_size, without_large_parts)
 from autobones.geometry.validate import mesh_arrays
 from autobones.io.mesh import load_mesh
@@ -60,6 +60,16 @@ def test_largest_part_is_a_mesh_of_its_own():
     np.testing.assert_array_equal(index, [3, 4, 5, 6])
     np.testing.assert_array_equal(Vs, V[3:])
     np.testing.assert_array_equal(Vs[Fs], V[F[1:]])
+
+
+def test_submesh_keeps_the_triangles_whose_corners_it_keeps():
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [5, 5, 5]], dtype=float)
+    F = np.array([[0, 1, 2], [0, 2, 3], [2, 3, 4]])
+    Vs, Fs = submesh(V, F, np.array([0, 1, 2, 3]))
+    np.testing.assert_array_equal(Vs, V[:4])
+    np.testing.assert_array_equal(Fs, F[:2])   # the triangle on vertex 4 goes with it
+    Vs, Fs = submesh(V, F, np.array([0, 2, 3]))
+    np.testing.assert_array_equal(Vs[Fs], V[F[1:2]])
 
 
 def test_part_areas_and_large_parts_go_by_area_not_by_vertex_count():

@@ -199,11 +199,18 @@ def largest_part(V, F):
     """
     F = np.asarray(F, dtype=np.int64)
     part = mesh_parts(len(V), F)
-    biggest = np.argmax(np.bincount(part))
-    index = np.flatnonzero(part == biggest)
-    remap = -np.ones(len(V), dtype=np.int64)
+    index = np.flatnonzero(part == np.argmax(np.bincount(part)))
+    return (*submesh(V, F, index), index)
+
+
+def submesh(V, F, index):
+    """The vertices ``index`` (k,) int of a mesh ``V`` (n, 3), ``F`` (m, 3) as a mesh of their own: ``V[index]``
+    (k, 3) and the triangles of ``F`` whose three corners are among them, renumbered (m', 3) int64."""
+    F = np.asarray(F, dtype=np.int64)
+    remap = np.full(len(V), -1, dtype=np.int64)
     remap[index] = np.arange(len(index))
-    return np.asarray(V)[index], remap[F[part[F[:, 0]] == biggest]], index
+    Fs = remap[F]
+    return np.asarray(V)[index], Fs[(Fs >= 0).all(axis=1)]
 
 
 def boundary_vertices(n, F):

@@ -43,7 +43,7 @@ from scipy.spatial import cKDTree
 from ..errors import AutobonesError
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
-from ..geometry.topology import used_vertices
+from ..geometry.topology import submesh, used_vertices
 from ..geometry.winding import outward_faces
 from ..io.landmark_names import NAMES, mirror_name
 from ..io.mesh import resolve_mesh
@@ -122,11 +122,7 @@ def _used_only(V, F):
     """``(V, F)`` without the vertices no triangle uses, ``F`` renumbered: a leftover vertex far away is not
     pictured, and framed into the pictures it shrank the face to a few pixels ("no face found")."""
     used = used_vertices(F, len(V))
-    if len(used) == len(V) or not len(F):
-        return V, F
-    renumber = np.zeros(len(V), dtype=np.int64)
-    renumber[used] = np.arange(len(used))
-    return V[used], renumber[F]
+    return (V, F) if len(used) == len(V) or not len(F) else submesh(V, F, used)
 
 
 @dataclass
