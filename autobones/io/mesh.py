@@ -197,7 +197,7 @@ def check_mesh(V, F, name="mesh", strays=False, from_file=False):
     if extent.max() <= 0 or extent.min() < 1e-4 * extent.max():
         raise AutobonesError(f"{name}: the mesh is flat (extent {extent.tolist()}); a head has volume")
     _check_area(V, F, extent, name)
-    _check_offset(V, F, U, name)
+    _check_offset(V, F, U, extent, name)
     apart = parts_apart(V, F)
     if apart is not None:
         shares, gap = apart
@@ -256,13 +256,12 @@ def _check_scale(U, name):
 SNAP = 0.1
 
 
-def _check_offset(V, F, U, name):
+def _check_offset(V, F, U, extent, name):
     far = float(np.abs(U).max())
     rounding = far * 2.0 ** -24
     edge = float(np.median(np.linalg.norm(V[F[:, 1]] - V[F[:, 0]], axis=1)))
     if rounding > SNAP * edge:
-        size = float((U.max(axis=0) - U.min(axis=0)).max())
-        raise AutobonesError(f"{name}: the head lies {far:.3g} from the origin, {far / size:,.0f} times its size: a "
+        raise AutobonesError(f"{name}: the head lies {far:.3g} from the origin, {far / extent.max():,.0f} times its size: a "
                              f"glb's 32-bit positions there round by {rounding:.2g}, {rounding / edge:.0%} of its "
                              "median edge (its vertices would snap together); move it near the origin first "
                              "(subtract its centre)")
@@ -352,12 +351,17 @@ def _sniff_off(path, size):
     """AutobonesError unless ``path`` is text whose first word (after comments) is OFF or a
     variant (COFF, NOFF, STOFF...)."""
     text = _text_head(path)
-    words = None if text is None else " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    words = None if text is None else _off_words(text)
     if not words or not words[0].upper().endswith("OFF"):
         raise AutobonesError(f"{path}: not a valid OFF file (not text starting with an OFF header)")
 
 
 _SNIFF = {".stl": _sniff_stl, ".off": _sniff_off}
+
+
+def _off_words(text):
+    """The words of an OFF file's ``text``, its ``#`` comments left out."""
+    return " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
 
 
 def _declared(path, ext):
@@ -368,7 +372,7 @@ def _declared(path, ext):
         head = text.split("end_header", 1)[0]
         found = dict(re.findall(r"^element\s+(vertex|face)\s+(\d+)", head, flags=re.M))
         return (int(found["vertex"]), int(found["face"])) if len(found) == 2 else None
-    words = " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    words = _off_words(text)
     if ext == ".off" and len(words) >= 3 and words[0].upper().endswith("OFF") and words[1].isdigit() \
             and words[2].isdigit():
         return int(words[1]), int(words[2])
