@@ -8,6 +8,7 @@ from autobones.geometry import laplacian as lap
 from autobones.geometry.areas import triangle_areas, vertex_areas
 from autobones.geometry.normals import triangle_normals, vertex_normals
 from autobones.geometry.rotations import polar_rotations, rotate_between, similarity
+from autobones.geometry.spatial_order import spatial_order
 from autobones.geometry.smooth import ramp, smoothstep, step
 from autobones.geometry.topology import (boundary_vertices, largest_part, mesh_edges, mesh_parts, part_areas, submesh, weld,
                                          weld_by_size, without_large_parts)
@@ -117,6 +118,18 @@ def test_weld_merges_copies_and_drops_collapsed_faces():
     F = np.array([[0, 1, 2], [3, 4, 5], [0, 3, 1]])                     # the last collapses
     Vw, Fw, index = weld(V, F, 1e-6)
     assert len(Vw) == 4 and len(Fw) == 2 and index[0] == index[3] and index[1] == index[4]
+
+
+def test_spatial_order_is_the_same_for_the_points_in_any_order_and_keeps_neighbours_near():
+    X = np.random.default_rng(0).random((4000, 3)) * [2.0, 1.0, 0.5]
+    p = np.random.default_rng(1).permutation(len(X))
+    np.testing.assert_array_equal(X[spatial_order(X)], X[p][spatial_order(X[p])])
+    step = np.linalg.norm(np.diff(X[spatial_order(X)], axis=0), axis=1)
+    assert np.median(step) < 0.2 * np.median(np.linalg.norm(np.diff(X, axis=0), axis=1))  # file order: random
+    assert len(spatial_order(np.zeros((0, 3)))) == 0 and spatial_order(np.ones((3, 3))).tolist() == [0, 1, 2]
+    # a seam's two copies of one vertex: told apart by the weight they carry, in either order
+    assert spatial_order(np.ones((2, 3)), tie=[2.0, 1.0]).tolist() == [1, 0]
+    assert spatial_order(np.ones((2, 3)), tie=[1.0, 2.0]).tolist() == [0, 1]
 
 
 def test_ict_has_many_parts_and_the_skin_is_the_largest(ict):

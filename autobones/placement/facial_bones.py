@@ -22,6 +22,7 @@ from ..errors import AutobonesError, counted
 from ..geometry.areas import vertex_areas
 from ..geometry.closest import closest_points
 from ..geometry.normals import vertex_normals
+from ..geometry.spatial_order import spatial_order
 
 DENSITIES = {"sparse": 8, "medium": 16, "dense": 32}
 MIRROR = np.array([-1.0, 1.0, 1.0])
@@ -117,13 +118,18 @@ class FacialBones:
                 f"the facial mask has {counted(len(X), 'vertex', 'vertices')}, fewer than the {self.n_bones} facial bones asked for; "
                 f"use a lower --density (at most {len(X)}), or sparse, medium or dense, which fit the mask")
         rng = np.random.default_rng(self.random_state)
+        # the seeds are drawn over the points in space order, so the same points in another order (a
+        # re-export) give the same layout, and a point moved or added a little nearby seeds
+        where = spatial_order(X, tie=w)
+        Xs, ws = X[where], w[where]
         best = None
         for _ in range(self.n_init):
-            C, partner = self._seed(X, w, rng)
-            C, labels, inertia = self._lloyd(X, w, C, partner)
+            C, partner = self._seed(Xs, ws, rng)
+            C, labels, inertia = self._lloyd(Xs, ws, C, partner)
             if best is None or inertia < best[2] * (1 - 1e-12):
                 best = (C, labels, inertia, partner)
-        C, labels, inertia, partner = best
+        C, _, inertia, partner = best
+        labels = _nearest(X, C)
         order = np.lexsort((C[:, 0], -np.round(C[:, 1], 9)))
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
@@ -242,6 +248,18 @@ def _nearest(X, C):
     return vq(X, C, check_finite=False)[0].astype(np.int64)
 
 
+def _area_sample(X, area, idx, size, random_state):
+    """At most ``size`` of ``idx`` (k,) drawn by ``area`` (k,): systematic sampling (one random offset,
+    even steps through the cumulative area) over the points ``X`` (k, 3) in space order, so the same
+    surface gives the same sample whatever its numbering and a little noise moves it a little (a
+    point holding more than one step of area is taken once)."""
+    where = spatial_order(X, tie=area)
+    cdf = np.cumsum(area[where])
+    u = np.random.default_rng(random_state).random()
+    picks = np.searchsorted(cdf, (np.arange(size) + u) * (cdf[-1] / size), side="right")
+    return idx[where[np.unique(np.minimum(picks, len(idx) - 1))]]
+
+
 def _under_skin(V, F, P, partner, max_depth):
     """Centroids deeper than ``max_depth`` under the skin (a sparse bone on a curved or boxy
     face) are pulled toward their closest surface point, then re-mirrored."""
@@ -294,9 +312,7 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_dept
     if len(idx) > max_points:
         # a dense scan: cluster a sample drawn by area (the same objective, estimated), then
         # label every mask vertex by its nearest centre
-        rng = np.random.default_rng(random_state)
-        p = area[idx] / area[idx].sum()
-        sub = np.sort(rng.choice(idx, size=max_points, replace=False, p=p))
+        sub = np.sort(_area_sample(V[idx], area[idx], idx, max_points, random_state))
         model.fit(V[sub])
         model.labels_ = _nearest(V[idx], model.cluster_centers_)
     else:
