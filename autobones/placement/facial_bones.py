@@ -295,7 +295,8 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_dept
     max_depth : float
         A centroid deeper than this under the skin (head sizes) is moved up to it.
     max_points : int
-        Masks with more vertices are clustered on an area-weighted sample of this size.
+        Masks with more vertices are clustered on an area-weighted sample of at most this size
+        (a vertex holding more than one sampling step of area is taken once).
     surface : (Vc, Fc), optional
         A coarser copy of the same surface for the closest-point test of ``max_depth``.
 
