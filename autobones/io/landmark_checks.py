@@ -198,8 +198,7 @@ def _check_spread(P, names, head, source):
         i, reach = far
         raise AutobonesError(f"{source}: {names[i]} lies {reach:.2g} times the other landmarks' spread from their "
                              f"centre ({P[i].tolist()}); a coordinate mistyped or in another unit?")
-    m = float(np.abs(P).max())
-    Q = P / m if m > 0 else P
+    Q, _ = _by_largest(P)
     spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
     if len(P) > 1 and spread == 0.0:
         raise AutobonesError(f"{source}: all {len(P)} landmarks are at the same point {P[0].tolist()}; "
@@ -215,6 +214,13 @@ def _check_spread(P, names, head, source):
                              f"they must spread over the face (check for a dropped coordinate)")
 
 
+def _by_largest(P):
+    """``(P / max|P|, max|P|)`` for points ``P`` (k, 3) (``P`` itself when all are zero): the checks measure on
+    the scaled copy so that huge (finite) coordinates cannot overflow their squares."""
+    m = float(np.abs(P).max())
+    return (P / m if m > 0 else P), m
+
+
 # a landmark farther than this many times the set's median distance from its median point is no landmark of
 # that head: a coordinate mistyped (1e20), which the checks after read as every other pair "at the same point"
 # or all "on one line" (their tolerances scale with the largest coordinate); a head's farthest landmark lies
@@ -227,8 +233,7 @@ def strayed(P):
     :data:`STRAY` times their median distance from it (``reach`` that ratio); else None."""
     if len(P) < 4 or not np.isfinite(P).all():
         return None
-    m = float(np.abs(P).max())
-    Q = P / m if m > 0 else P   # huge (finite) coordinates must not overflow the squares
+    Q, _ = _by_largest(P)
     d = np.linalg.norm(Q - np.median(Q, axis=0), axis=1)
     typical = float(np.median(d))
     i = int(np.argmax(d))
@@ -242,9 +247,7 @@ def same_point_pairs(P, head=None):
         return []
     from scipy.spatial import cKDTree
 
-    # work on P / max|P| so that huge (finite) coordinates cannot overflow
-    m = float(np.abs(P).max())
-    Q = P / m if m > 0 else P
+    Q, m = _by_largest(P)
     spread = float((Q.max(axis=0) - Q.min(axis=0)).max())
     scale = head / m if head and m > 0 else spread
     return sorted(cKDTree(Q).query_pairs(1e-7 * scale))
@@ -254,8 +257,7 @@ def on_one_line(P):
     """True when three or more points ``P`` (k, 3) lie on one line (they cannot fix a frame)."""
     if len(P) < 3:
         return False
-    m = float(np.abs(P).max())
-    Q = P / m if m > 0 else P
+    Q, _ = _by_largest(P)
     s = np.linalg.svd(Q - Q.mean(axis=0), compute_uv=False)
     return bool(s[1] <= 1e-6 * s[0])
 
@@ -311,8 +313,7 @@ def rms_spread(P, head):
     inf for points that are not all finite or a head of no size."""
     if not np.isfinite(P).all() or not head > 0:
         return np.inf
-    m = float(np.abs(P).max())   # on P / max|P|: huge (finite) coordinates must not overflow the squares
-    Q = P / m if m > 0 else P
+    Q, m = _by_largest(P)
     return float(np.sqrt(((Q - Q.mean(axis=0)) ** 2).sum(axis=1).mean())) * (m / head if m > 0 else 0.0)
 
 

@@ -128,8 +128,9 @@ class FacialBones:
             C, labels, inertia = self._lloyd(Xs, ws, C, partner)
             if best is None or inertia < best[2] * (1 - 1e-12):
                 best = (C, labels, inertia, partner)
-        C, _, inertia, partner = best
-        labels = _nearest(X, C)
+        C, labels_s, inertia, partner = best
+        labels = np.empty_like(labels_s)
+        labels[where] = labels_s   # back to the given order
         order = np.lexsort((C[:, 0], -np.round(C[:, 1], 9)))
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
@@ -248,13 +249,13 @@ def _nearest(X, C):
     return vq(X, C, check_finite=False)[0].astype(np.int64)
 
 
-def _area_sample(X, area, idx, size, random_state):
-    """At most ``size`` of ``idx`` (k,) drawn by ``area`` (k,): systematic sampling (one random offset,
-    even steps through the cumulative area) over the points ``X`` (k, 3) in space order, so the same
-    surface gives the same sample whatever its numbering and a little noise moves it a little (a
-    point holding more than one step of area is taken once)."""
-    where = spatial_order(X, tie=area)
-    cdf = np.cumsum(area[where])
+def _area_sample(V, area, idx, size, random_state):
+    """At most ``size`` of the vertices ``idx`` (k,) int of ``V`` (n, 3), drawn by their ``area`` (n,):
+    systematic sampling (one random offset, even steps through the cumulative area) over them in space
+    order, so the same surface gives the same sample whatever its numbering and a little noise moves it
+    a little (a vertex holding more than one step of area is taken once)."""
+    where = spatial_order(V[idx], tie=area[idx])
+    cdf = np.cumsum(area[idx][where])
     u = np.random.default_rng(random_state).random()
     picks = np.searchsorted(cdf, (np.arange(size) + u) * (cdf[-1] / size), side="right")
     return idx[where[np.unique(np.minimum(picks, len(idx) - 1))]]
@@ -313,7 +314,7 @@ def facial_bones(V, F, mask, n_bones, random_state=0, bone_length=0.03, max_dept
     if len(idx) > max_points:
         # a dense scan: cluster a sample drawn by area (the same objective, estimated), then
         # label every mask vertex by its nearest centre
-        sub = np.sort(_area_sample(V[idx], area[idx], idx, max_points, random_state))
+        sub = np.sort(_area_sample(V, area, idx, max_points, random_state))
         model.fit(V[sub])
         model.labels_ = _nearest(V[idx], model.cluster_centers_)
     else:
