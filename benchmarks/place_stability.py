@@ -30,6 +30,7 @@ from scipy.optimize import linear_sum_assignment
 
 import autobones
 from autobones.io.mesh import load_mesh
+from autobones.landmarks.orientation import turn_degrees
 
 DATA = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
 
@@ -55,12 +56,6 @@ def bone_move(a, b, size):
     return float(D[i, j].max()) / size
 
 
-def frame_turn(a, b):
-    """Angle (degrees) between two frames' rotations."""
-    R = a.frame.rotation @ b.frame.rotation.T
-    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))))
-
-
 def measure(path, noise, draws):
     V, F = load_mesh(path)
     size = float(np.ptp(V, axis=0).max())
@@ -73,7 +68,7 @@ def measure(path, noise, draws):
         row["reordered"] = max(row["reordered"], bone_move(base, rig(V, F[rng.permutation(len(F))]), size))
         noisy = rig(V + rng.normal(size=V.shape) * noise * size, F)
         row["noise"] = max(row["noise"], bone_move(base, noisy, size))
-        row["turn"] = max(row["turn"], frame_turn(base, noisy))
+        row["turn"] = max(row["turn"], turn_degrees(base.frame.rotation, noisy.frame.rotation))
     return row
 
 
@@ -89,7 +84,8 @@ def main(argv=None):
     missing = [n for n in names if n not in found]
     if missing:
         sys.exit(f"place_stability.py: no shared head named {', '.join(missing)} (in {DATA})")
-    print(f"| head | vertices | vertices renumbered | triangles reordered | noise {args.noise:g} | frame turn, noise (deg) | s |")
+    print(f"| head | vertices | vertices renumbered | triangles reordered | noise {args.noise:g} "
+          "| frame turn, noise (deg) | s |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     worst = {"renumbered": [], "reordered": [], "noise": []}
     for name in names:

@@ -2,8 +2,9 @@
 
 A random draw over points (k-means++ seeds, a subsample) picks index ``i`` where a uniform number falls
 in the cumulative weights. Taken in the file's order, renumbering the vertices or one vertex joining a
-mask changes every later pick to an unrelated point, and a different k-means layout wins. Taken in a space-filling (Morton) order the picks are the same points when the points are
-the same, and a nearby point when a weight or a member changes a little.
+mask changes every later pick to an unrelated point, and a different k-means layout wins. Taken in a
+space-filling (Morton) order the picks are the same points when the points are the same, and a nearby
+point when a weight or a member changes a little.
 """
 import numpy as np
 
