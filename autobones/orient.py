@@ -116,7 +116,8 @@ class Frame:
         or "neck cut"), ``margin`` (the reference's overlay: the best front's score against the best
         facing the other way, relative; the neck cut: the share of the profile's reach ahead of it)
         and ``close`` (under :data:`CLOSE_OVERLAY` / :data:`CLOSE_CUT`: check the rig, or give the
-        front). None when the front was given, or nothing faced the other way.
+        front); ``against`` ``"down"`` when a face-only capture's up was told from its down instead (every
+        candidate faced one way). None when the front was given, or nothing faced or stood the other way.
     """
 
     rotation: np.ndarray
@@ -300,6 +301,13 @@ def close_front(frame):
     check = frame.front_check
     if not check or not check["close"]:
         return None
+    if check.get("against") == "down":
+        # a face-only capture: its front is the way it faces, its up was the doubt (the menpo template
+        # cropped under its chin stood upside down at 0.3 %)
+        return (f"up {frame.up} is a close call against down (by the reference head: it overlays "
+                f"{check['margin']:.1%} better than standing the other way up; under {CLOSE_OVERLAY:.0%} is close): "
+                "look at the rig (autobones view); if the face stands upside down, give the file's axes: "
+                "--up AXIS --front AXIS (up=, front= in Python)")
     if check["told_by"] == "neck cut":
         how = (f"by its neck cut: {check['margin']:.0%} of the head's reach lies ahead of it; under "
                f"{CLOSE_CUT:.0%} is close")
@@ -314,12 +322,17 @@ def close_front(frame):
 
 def _overlay_check(scores, candidates, best):
     """:attr:`Frame.front_check` of the reference's choice: the ``best`` of ``candidates`` ((up, front)
-    pairs) by overlay ``scores`` against the best candidate facing the other way; None if none does."""
-    away = [s for s, (_, f) in zip(scores, candidates) if f @ candidates[best][1] < 0]
-    if not away:
+    pairs) by overlay ``scores`` against the best candidate facing the other way; where all face one way
+    (a face-only capture faces away from its opening), against the best one standing the other way up
+    (``against`` ``"down"``); None if none does either."""
+    up, front = candidates[best]
+    away = [s for s, (_, f) in zip(scores, candidates) if f @ front < 0]
+    down = [s for s, (u, _) in zip(scores, candidates) if u @ up < 0]
+    if not away and not down:
         return None
-    margin = (min(away) - scores[best]) / max(scores[best], 1e-300)
-    return {"told_by": "reference head", "margin": round(float(margin), 4), "close": bool(margin < CLOSE_OVERLAY)}
+    margin = (min(away or down) - scores[best]) / max(scores[best], 1e-300)
+    check = {"told_by": "reference head", "margin": round(float(margin), 4), "close": bool(margin < CLOSE_OVERLAY)}
+    return check if away else {**check, "against": "down"}
 
 
 def _exact_frame(V, F, center, normal, offset, up_d, front_d, cues, sym_err):

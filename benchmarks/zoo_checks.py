@@ -133,6 +133,22 @@ def _cut_behind_ears(name, V, F, lm, behind=0.3):
     return Variant(name, Vc, Fc, kept, lm, core=np.ones(len(Vc), dtype=bool))
 
 
+def _cut_under_chin(name, V, F, lm, under=0.05):
+    """The copy of (V, F) cropped level with the chin: every triangle wholly above a plane across the
+    landmarks' up ``under`` ex-ex below the menton (else the pogonion) kept, as a face scan or a bust is
+    often cropped; transfer is given the landmarks still on the surface. None without a chin to cut at."""
+    ref = landmark_frame(V, F, lm) if lm else None
+    chin = None if ref is None else lm.get("menton", lm.get("pogonion"))
+    if chin is None:
+        return None
+    at = chin - under * unit(lm, V) * ref["up"]
+    Vc, Fc = compact(V, F[((V - at) @ ref["up"] > 0)[F].all(axis=1)])
+    names = list(lm)
+    C = closest_points(np.array([lm[n] for n in names]), Vc, Fc)[0]
+    kept = {n: lm[n] for n, c in zip(names, C) if np.linalg.norm(c - lm[n]) <= 0.02 * unit(lm, V)}
+    return Variant(name, Vc, Fc, kept, lm, core=np.ones(len(Vc), dtype=bool))
+
+
 def make_variant(name, V, F, lm, seed):
     """The copy ``name`` of the head (V, F) with landmarks ``lm`` (or None); None when it does not apply."""
     core = np.ones(len(V), dtype=bool)
@@ -158,6 +174,8 @@ def make_variant(name, V, F, lm, seed):
         return _with_holes(name, V, F, lm, seed)
     if name == "backcut":  # cut across the face's front behind the ears (a bust's or a trophy's cut)
         return _cut_behind_ears(name, V, F, lm)
+    if name == "chincut":  # cropped level with the chin (a face scan's or a bust's crop): no neck
+        return _cut_under_chin(name, V, F, lm)
     if name == "stray":
         size = float(np.ptp(V, axis=0).max())
         p = V.mean(axis=0) + 10 * size * np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])

@@ -164,7 +164,8 @@ def test_a_face_mask_whose_chin_is_not_found_keeps_its_mouth_and_chin_in_the_fac
     or missed by a degree of its frame; missed, the depth groups' split ran through the upper lip and
     weighted the mouth and chin to the neck (0.29 of the face group left in the facial mask). A face
     mask is never cut higher than its chin may lie: nothing is neck, and the lips and chin keep
-    facial bones."""
+    facial bones. Its chin is now found where its midline ends; a mask that ends at its chin has no neck
+    either (its edge dips 0.025 head sizes lower along the jaw: that is jaw, not neck)."""
     rig = autobones.place(data("misc/fran_cut.obj"), density="medium")
     assert "no_neck" in rig.other["joints"]["neck"]["cues"]
     assert rig.weights[:, rig.skeleton.names.index("neck")].max() < 1e-6

@@ -1,5 +1,6 @@
 """autobones.placement.segment: depth groups, the chin, head and neck bones on synthetic and real heads."""
 import numpy as np
+import pytest
 
 from autobones.io.mesh import load_mesh
 from autobones.orient import detect_frame
@@ -41,7 +42,8 @@ def test_a_head_with_no_neck_keeps_its_muzzle_in_the_face():
     """Blender's Suzanne (tests/data/blender) Loop-subdivided twice: no chin step under its muzzle
     (the midline profile's most anterior point), so the face was cut at the depth groups' split,
     through its eyes, and the muzzle went to the neck (0.54 of the face group kept). A cut above the
-    nose tip is no chin: the whole face group, muzzle included, is the facial mask."""
+    nose tip is no chin: the whole face group, muzzle included, is the facial mask. Her profile ends
+    at her chin (no neck under it): that lowest midline point is her menton."""
     from pathlib import Path
 
     import trimesh
@@ -51,7 +53,8 @@ def test_a_head_with_no_neck_keeps_its_muzzle_in_the_face():
     frame = detect_frame(V, F)
     C = frame.to_canonical(V)
     seg = segment_head(C, F)
-    assert seg.chin_height is None                      # the case: no chin step found
+    mid = C[np.abs(C[:, 0]) < 0.03]
+    assert seg.chin_height == pytest.approx(mid[:, 1].min(), abs=0.01)   # no step: where the mesh ends
     assert seg.facial_mask[np.argmax(C[:, 2])]          # the muzzle's tip
     assert seg.facial_mask.sum() >= 0.95 * (seg.labels == FACE).sum()
 
@@ -118,3 +121,30 @@ def test_joints_recorded_with_their_cues():
     assert j.cues["head"] and j.cues["neck"]
     assert seg.chin_height is None or C[:, 1].min() < seg.chin_height < j.head[1]
     assert j.to_dict()["head"]["cues"] == j.cues["head"]
+
+
+@pytest.mark.parametrize("rel, under", [("ict/identity001.obj", 0.0), ("ict/identity002.obj", 0.0),
+                                        ("menpo3d/james.obj", 0.02)])
+def test_a_head_cropped_under_its_chin_has_its_chin_at_the_crop(rel, under):
+    """A scan cropped right under the chin (a whole head, or a face mask) has no step there in its midline
+    profile: the nearest step was its lips or its nose base (main: 0.22-0.28 head sizes above the menton on
+    these three), and the face was cut there: the mouth and chin rigged as neck. The profile ends with the
+    chin's front, so the crop is the chin, and the mouth is in the facial mask."""
+    from autobones.io.landmarks import read_landmarks
+    from autobones.orient import anatomical_axes
+
+    V, F = load_mesh(data(rel))
+    lm = read_landmarks(data(rel.replace(".obj", ".landmarks.json")))
+    axes = anatomical_axes(V, F, lm)
+    size = np.ptp(V @ axes.T, axis=0).max()
+    h = V @ axes[1]
+    F = F[(h[F] > lm["menton"] @ axes[1] - under * size).all(axis=1)]   # cropped at / under the menton
+    frame = detect_frame(V, F)
+    assert frame.rotation[1] @ axes[1] > np.cos(np.radians(30))        # upright, so heights compare
+    C = frame.to_canonical(V)
+    seg = segment_head(C, F)
+    menton = frame.to_canonical(lm["menton"][None])[0, 1]
+    assert seg.chin_height == pytest.approx(menton, abs=0.04)
+    used = np.unique(F)
+    for name in ("labiale_superius", "labiale_inferius", "menton"):
+        assert seg.facial_mask[used[np.argmin(np.linalg.norm(V[used] - lm[name], axis=1))]], name

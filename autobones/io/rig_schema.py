@@ -138,7 +138,7 @@ def check_finite_tree(x, key):
 def check_frame(d, key="frame"):
     """The sidecar's ``frame``: a 3x3 rotation (orthonormal, det +1), an origin, ``head_size`` > 0, and
     optionally ``axes`` (the head's anatomical axes, a rotation too) and ``front_check`` (how clearly
-    the front was told from the back)."""
+    the front was told from the back, or with ``against`` ``"down"`` a face capture's up from its down)."""
     mapping(d, key)
     _rotation(d.get("rotation"), f"{key}.rotation")
     if d.get("axes") is not None:
@@ -154,6 +154,9 @@ def check_frame(d, key="frame"):
             raise SchemaError(f"{key}.front_check: expected told_by 'reference head' or 'neck cut' and close true "
                               "or false")
         number(check.get("margin"), f"{key}.front_check.margin")
+        if check.get("against", "back") not in ("back", "down"):
+            raise SchemaError(f"{key}.front_check.against: expected 'back' or 'down' (a face capture's up told "
+                              "from its down)")
 
 
 def _rotation(R, key):

@@ -35,6 +35,7 @@ CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's
 TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (_nose_tip)
 JAW_FRONT = 0.1       # head sizes: a long head's chin step starts at most this far behind the nose tip
 THROAT = 0.18         # head sizes: a step starting further behind the nose tip is a throat's (human chins 0.07-0.16)
+END_REACH = 5         # 1% bins: the profile's lowest stretch read for a chin the mesh ends at (_chin_height)
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")
@@ -317,7 +318,9 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     (vertex to menton is about 1.2 times the head's length, glabella-opisthocranion;
     anthropometry.md). The head's length, not its depth at the middle group's level nor
     that group's split: both moved with a few degrees of pitch (ICT's head pitched 0-10
-    degrees found its chin at the lower lip at 4 of 8 angles).
+    degrees found its chin at the lower lip at 4 of 8 angles). Where the profile ends within a
+    chin's depth of the nose tip (:data:`THROAT`), the mesh ends at the chin: its lowest point is a
+    step too. On a face mask (``below_top`` given) the lowest step is the chin.
 
     ``points``: (k, 3) canonical surface points of the whole head; ``tip`` their nose tip
     (:func:`_nose_tip`, None: no chin); ``length`` the head's length (:func:`.joints.head_length`),
@@ -342,17 +345,25 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     # drop over the next 3 bins (3% of head size of height)
     drop = np.r_[front[:-3] - front[3:], np.zeros(3)]
     peak = (drop >= 0.04) & (drop >= np.r_[0, drop[:-1]]) & (drop >= np.r_[drop[1:], 0])
-    if not peak.any():
-        return None
-    expected = top - 1.2 * length
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
     back = front[0] - front[peak]   # how far behind the nose tip each step starts
+    end_back = front[0] - front[-END_REACH:].max()
+    if end_back <= THROAT:
+        # the profile ends with a chin's front, not a throat's: a head cropped under its chin has no
+        # step there, and the nearest one was its lips or nose base (ICT cut at the menton: 0.22-0.27
+        # head sizes high; James' mask 0.23-0.28; fran_cut found none)
+        ends, back = np.r_[ends, below[:, 1].min()], np.r_[back, end_back]
+    if len(ends) == 0:
+        return None
+    expected = top - 1.2 * length
     if below_top is not None:
         keep = top - ends >= below_top
         ends, back = ends[keep], back[keep]
         if len(ends) == 0:
             return None
-    pick = int(np.argmin(np.abs(ends - expected)))
+    # a face mask's depth is no cranium's length to expect its chin from: its chin is its lowest step (a
+    # mask's neck, where it has one, ends with no step; James' mask cropped under the chin took its lower lip)
+    pick = int(np.argmin(np.abs(ends - expected))) if below_top is None else int(np.argmin(ends))
     if expected < points[:, 1].min() and back[pick] > THROAT:
         # a head long, not tall (a snout): its length is no cranium's, the chin it expects lies
         # below the mesh, and the step nearest that starts far behind the face: a throat's or the
