@@ -126,7 +126,13 @@ def _cut_behind_ears(name, V, F, lm, behind=0.3):
         at = 0.5 * (lm["tragion_l"] + lm["tragion_r"]) - behind * u * ref["front"]
     else:
         at = lm["opisthocranion"] + behind * u * ref["front"]
-    Vc, Fc = compact(V, F[((V - at) @ ref["front"] > 0)[F].all(axis=1)])
+    return _kept_side(name, V, F, lm, at, ref["front"], u)
+
+
+def _kept_side(name, V, F, lm, at, normal, u):
+    """The copy of (V, F) with every triangle wholly on the ``normal`` side of the plane through ``at``,
+    given the landmarks still on its surface (within 0.02 of ex-ex ``u``)."""
+    Vc, Fc = compact(V, F[((V - at) @ normal > 0)[F].all(axis=1)])
     names = list(lm)
     C = closest_points(np.array([lm[n] for n in names]), Vc, Fc)[0]
     kept = {n: lm[n] for n, c in zip(names, C) if np.linalg.norm(c - lm[n]) <= 0.02 * u}
@@ -141,12 +147,8 @@ def _cut_under_chin(name, V, F, lm, under=0.05):
     chin = None if ref is None else lm.get("menton", lm.get("pogonion"))
     if chin is None:
         return None
-    at = chin - under * unit(lm, V) * ref["up"]
-    Vc, Fc = compact(V, F[((V - at) @ ref["up"] > 0)[F].all(axis=1)])
-    names = list(lm)
-    C = closest_points(np.array([lm[n] for n in names]), Vc, Fc)[0]
-    kept = {n: lm[n] for n, c in zip(names, C) if np.linalg.norm(c - lm[n]) <= 0.02 * unit(lm, V)}
-    return Variant(name, Vc, Fc, kept, lm, core=np.ones(len(Vc), dtype=bool))
+    u = unit(lm, V)
+    return _kept_side(name, V, F, lm, chin - under * u * ref["up"], ref["up"], u)
 
 
 def make_variant(name, V, F, lm, seed):
