@@ -111,9 +111,7 @@ def place(mesh=None, density="medium", up=None, front=None, random_state=0, land
     pivot, note = _face_mask_pivot(C, F)
     lap("face_landmarks")
     seg = segment_head(C, F, volume=coarse, pivot=pivot)
-    if _no_neck(C, F, seg.joints, frame) or not (seg.neck.any() or _flat_base(C, F)):
-        # a head with nothing cut below its chin (a face mask whose chin step, at its edge, was missed)
-        # has no neck to weigh; a flat base is a neck's cap even where the chin reaches down to it
+    if _no_neck(C, F, seg, frame):
         seg.joints.cues["neck"].append("no_neck")
     lap("segment")
     asked, n_bones = n_bones, _fewer_bones(n_bones, density, seg.facial_mask, source)
@@ -217,33 +215,35 @@ def _fewer_bones(n_bones, density, mask, source):
     return n
 
 
-def _no_neck(C, F, joints, frame):
-    """Whether the head has no neck under its chin: its menton (``joints``, :mod:`.joints`) within
-    ``NO_NECK`` head sizes of its lowest vertex (of ``C`` (n, 3) canonical, used by ``F``), with no
-    planar cut (``frame.cut``) nor a flat base (:func:`_flat_base`); on a face mask, of its lowest
-    midline vertex. Its lowest vertices are then its chin, which must turn with the head: held still
-    as a neck's base, Blender's Suzanne's muzzle tip stayed behind on a head turn and the muzzle
-    sheared. (The mentons of the shared heads with no cut and no face mask lie 0.038-0.46 head sizes
-    above their lowest vertex, Suzanne's 0.000-0.001.)"""
+def _no_neck(C, F, seg, frame):
+    """Whether the head has no neck to weigh, from ``C`` (n, 3) canonical (used by ``F``), its
+    :class:`.segment.HeadSegmentation` ``seg`` and its ``frame``:
+
+    - nothing was cut below its chin (a face mask whose chin step, at its edge, was missed), unless
+      its lowest level is a flat base as deep as the head (:data:`FLAT_BASE`): a neck's cap that the
+      chin may reach (the robot's: 0.83 of its depth), not a chin alone (Suzanne's: 0.08);
+    - or its menton lies within ``NO_NECK`` head sizes of its lowest vertex, with no planar cut
+      (``frame.cut``) nor a flat base; on a face mask, of its lowest midline vertex. Its lowest
+      vertices are then its chin, which must turn with the head: held still as a neck's base,
+      Blender's Suzanne's muzzle tip stayed behind on a head turn and the muzzle sheared. (The
+      mentons of the shared heads with no cut and no face mask lie 0.038-0.46 head sizes above their
+      lowest vertex, Suzanne's 0.000-0.001.)
+    """
     used = C[used_vertices(F, len(C))]
-    if "face_only" in joints.cues["head"]:
+    low = used[used[:, 1] <= used[:, 1].min() + NO_NECK]
+    flat = np.ptp(low[:, 2]) > FLAT_BASE * np.ptp(used[:, 2])
+    if not (seg.neck.any() or flat):
+        return True
+    menton = seg.joints.menton
+    if "face_only" in seg.joints.cues["head"]:
         # a mask that ends at its chin: what lies lower, at its sides, is the jaw's edge, not a neck
         # (fran_cut's lower edge dips 0.025 head sizes along its jaw; the neck took it once its chin,
         # at that edge, was found)
         mid = used[np.abs(used[:, 0]) < MIDLINE]
-        return len(mid) > 0 and joints.menton - float(mid[:, 1].min()) <= NO_NECK
-    if frame.cut is not None or _flat_base(C, F):
+        return len(mid) > 0 and menton - float(mid[:, 1].min()) <= NO_NECK
+    if frame.cut is not None or flat:
         return False
-    return joints.menton - float(used[:, 1].min()) <= NO_NECK
-
-
-def _flat_base(C, F):
-    """Whether the lowest level of ``C`` (n, 3) canonical (used by ``F``) is a flat base as deep as the
-    head (:data:`FLAT_BASE`): a neck's cap that the chin may reach (the robot's: 0.83 of its depth), not
-    a chin alone (Suzanne's: 0.08)."""
-    used = C[used_vertices(F, len(C))]
-    low = used[used[:, 1] <= used[:, 1].min() + NO_NECK]
-    return bool(np.ptp(low[:, 2]) > FLAT_BASE * np.ptp(used[:, 2]))
+    return menton - float(used[:, 1].min()) <= NO_NECK
 
 
 def _place_on_transfer(mesh, landmarks, rig, n_bones, density, up, front, random_state):
