@@ -35,6 +35,7 @@ CRANIUM = 0.5         # of a first length below the top: the slabs the cranium's
 TIP_FLOOR = 0.95      # head lengths below the top: the nose tip is sought above (_nose_tip)
 JAW_FRONT = 0.1       # head sizes: a long head's chin step starts at most this far behind the nose tip
 THROAT = 0.18         # head sizes: a step starting further behind the nose tip is a throat's (human chins 0.07-0.16)
+NECK_THROAT = 0.12    # head sizes: ... where a neck goes on below the profile (animal throats from 0.13; _chin_height)
 END_REACH = 5         # 1% bins: the profile's lowest stretch read for a chin the mesh ends at (_chin_height)
 
 FACE, MIDDLE, BACK = 0, 1, 2
@@ -364,12 +365,16 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     # a face mask's depth is no cranium's length to expect its chin from: its chin is its lowest step (a
     # mask's neck, where it has one, ends with no step; James' mask cropped under the chin took its lower lip)
     pick = int(np.argmin(np.abs(ends - expected))) if below_top is None else int(np.argmin(ends))
-    if expected < points[:, 1].min() and back[pick] > THROAT:
+    # a throat's step starts further back than any chin's; where a neck goes on below the profile (it ends
+    # further back than THROAT) an animal's throat steps start from 0.13 (the ogre's, the goat's), where
+    # the mesh ends at a chin a cropped human chin's step starts up to 0.16 behind the nose tip
+    throat = THROAT if end_back <= THROAT else NECK_THROAT
+    if expected < points[:, 1].min() and back[pick] > throat:
         # a head long, not tall (a snout): its length is no cranium's, the chin it expects lies
         # below the mesh, and the step nearest that starts far behind the face: a throat's or the
         # neck cut's (the cow's chin was taken 0.24 head sizes under its menton). A lower jaw ends
         # under the face: the highest step that starts within JAW_FRONT of the nose tip (the zoo's
-        # animals' jaws 0.03-0.06 behind it, their throats 0.19-0.44; human chins 0.07-0.16)
+        # animals' jaws 0.03-0.06 behind it, their throats 0.13-0.44; human chins 0.07-0.16)
         jaw = back <= JAW_FRONT
         if jaw.any():
             return float(ends[jaw].max())
