@@ -103,6 +103,26 @@ def test_deformation_transfer_is_scale_and_rotation_free():
     assert np.linalg.norm(X - want) / np.linalg.norm(want) < 0.01
 
 
+def test_deformation_transfer_onto_a_head_with_vertices_no_triangle_uses():
+    """A scan with holes cut out keeps the holes' vertices, each a part of its own with no triangle:
+    the parts' coverage counted triangles only up to the last part that had one, and ``transfer
+    --arkit`` stopped with a ValueError on a head of several parts (James with 12 holes, the zoo's
+    ``holes`` copy). Now the head takes the shapes as it does without them."""
+    S = load_shapes()
+    D = S.deltas["jawOpen"][None]
+    moving = np.linalg.norm(D[0], axis=1) > 0
+    n = len(S.vertices)
+    far = S.vertices.max(axis=0) + 1.0
+    tri = far + 0.01 * np.eye(3)                       # a separate part (an eyeball, a tooth) ...
+    Vt = np.vstack([S.vertices, tri, S.vertices[:3] + 0.01])   # ... then three vertices in no triangle
+    Ft = np.vstack([S.faces, n + np.arange(3)[None]])
+    X = DeformationTransfer().fit(S.vertices, S.faces, S.vertices, Vt, Ft, moving=moving).transform(D)[0]
+    want = DeformationTransfer().fit(S.vertices, S.faces, S.vertices, S.vertices, S.faces,
+                                     moving=moving).transform(D)[0]
+    assert X.shape == (n + 6, 3) and np.isfinite(X).all()
+    np.testing.assert_allclose(X[:n], want, rtol=0, atol=1e-6 * np.abs(want).max())   # the mean edge moved: 1e-7
+
+
 # --------------------------------------------------------------------------- on a test head
 
 @pytest.mark.parametrize("shape, obj, bound", [("jawOpen", "jawOpen.obj", 0.93),

@@ -262,7 +262,10 @@ class DeformationTransfer:
         covered = (np.sqrt(d2) <= self.max_distance * edge) & (cos > 0.5)
         part = self._part = mesh_parts(len(V_tgt), F_tgt)
         fpart = part[F_tgt[:, 0]]
-        frac = np.bincount(fpart, covered, minlength=part.max() + 1) / np.maximum(np.bincount(fpart), 1)
+        # a vertex no triangle uses is a part of its own, with no triangle: both counts span every part
+        # (a scan with holes cut out keeps their vertices: James with 12 holes stopped with a ValueError)
+        parts = part.max() + 1
+        frac = np.bincount(fpart, covered, minlength=parts) / np.maximum(np.bincount(fpart, minlength=parts), 1)
         covered &= frac[fpart] >= self.min_part_coverage
         if free is not None:
             covered &= ~free
