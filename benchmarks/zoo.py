@@ -9,8 +9,8 @@ Heads: every mesh of ``../shared/data`` with a landmark file (``zoo/*``, menpo3d
 ICT identities 000-002, the goat and the robot with ``tests/landmarks``' files), identity000 wearing five
 real ICT expressions (open jaw, smile, surprise, pucker, blink; ``zoo_expressive.py``) and the ``misc``
 heads without landmarks (place-only checks; the robot's expressions measured against its neutral's landmark
-frame). Variants: as is; 6 random rotations (seed 31); x0.001, x1000;
-remeshed (Loop x1, decimated back to the triangle count); decimated to 5k vertices (larger heads only);
+frame). Variants: as is; 6 random rotations (seed 31); x0.001, x1000; remeshed (Loop x1, or midpoints
+where Loop leaves the surface, decimated back to the triangle count); decimated to 5k vertices (larger heads only);
 one stray triangle 10 head sizes away; landmarks jittered by 1% of ex-ex and snapped back to the skin;
 every triangle wound inward (``flip``, normals into the head); the head's mirror image (``mirror``, x
 negated, written outward, left and right landmark names swapped); 12 holes of 0.03 head sizes cut away
