@@ -18,7 +18,7 @@ import numpy as np
 from autobones.arkit.folds import ON_TOP, folded_triangles
 from autobones.arkit.lids import eye_sides, gap_closure
 from autobones.geometry.closest import closest_points
-from autobones.geometry.topology import used_vertices
+from autobones.geometry.topology import used_vertices, weld_by_size
 from autobones.io.landmark_names import mirror_name
 from autobones.rig_transfer.jaw import MAX_JUMP, face_unit, lip_line_edges
 
@@ -67,20 +67,35 @@ def rotations():
 
 def remesh(V, F):
     """Another tessellation of the same surface: one Loop subdivision (libigl), then quadric decimation
-    back to ``len(F)`` triangles. Where Loop's stencils leave the surface (a vertex more than
-    ``REMESH_OFF`` head sizes off it: the beast's doubled triangles threw libigl's 1.8 head sizes, and
-    trimesh's Loop, used until 2026-12-07, threw the SMPL woman's, the ogre's, James' and the robot's
-    0.27-0.5), a midpoint subdivision instead."""
+    back to ``len(F)`` triangles. Welded by position first where that leaves every edge on at most two
+    triangles (Loop's boundary rule shrank the robot's unwelded faces apart, and the copy had cracks its
+    head has not; welded, ICT's parts touch along 108 edges, on which libigl's Loop crashes). Where the
+    mesh is not manifold, or Loop's stencils leave the surface (a vertex more than ``REMESH_OFF`` head
+    sizes off it: trimesh's Loop, used until 2026-12-07, threw the SMPL woman's, the ogre's, the beast's,
+    the falcon's, James' and the robot's 0.2-0.5), a midpoint subdivision instead."""
     import fast_simplification
     import igl
     import trimesh
 
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
-    Vs, Fs = igl.loop(V, F)
-    off = np.linalg.norm(Vs - closest_points(Vs, V, F)[0], axis=1).max()
-    if off > REMESH_OFF * float(np.ptp(V[used_vertices(F, len(V))], axis=0).max()):
+    Vw, Fw = compact(*weld_by_size(V, F)[:2])
+    if _manifold(Fw):
+        V, F = Vw, Fw
+    size = float(np.ptp(V[used_vertices(F, len(V))], axis=0).max())
+    Vs = Fs = None
+    if _manifold(F):
+        Vs, Fs = igl.loop(V, F)
+        if np.linalg.norm(Vs - closest_points(Vs, V, F)[0], axis=1).max() > REMESH_OFF * size:
+            Vs = Fs = None
+    if Vs is None:
         Vs, Fs = trimesh.remesh.subdivide(V, F)
     return compact(*fast_simplification.simplify(Vs, Fs, target_count=len(F)))
+
+
+def _manifold(F):
+    """True when no edge of the triangles ``F`` (m, 3) lies on more than two of them."""
+    E = np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    return bool(np.unique(E, axis=0, return_counts=True)[1].max(initial=0) <= 2)
 
 
 def compact(V, F):
