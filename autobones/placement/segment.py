@@ -349,7 +349,8 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
     back = front[0] - front[peak]   # how far behind the nose tip each step starts
     end_back = front[0] - front[-END_REACH:].max()
-    if end_back <= THROAT:
+    ends_at_chin = end_back <= THROAT
+    if ends_at_chin:
         # the profile ends with a chin's front, not a throat's: a head cropped under its chin has no
         # step there, and the nearest one was its lips or nose base (ICT cut at the menton: 0.22-0.27
         # head sizes high; James' mask 0.23-0.28; fran_cut found none)
@@ -365,11 +366,10 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     # a face mask's depth is no cranium's length to expect its chin from: its chin is its lowest step (a
     # mask's neck, where it has one, ends with no step; James' mask cropped under the chin took its lower lip)
     pick = int(np.argmin(np.abs(ends - expected))) if below_top is None else int(np.argmin(ends))
-    # a throat's step starts further back than any chin's; where a neck goes on below the profile (it ends
-    # further back than THROAT) an animal's throat steps start from 0.13 (the ogre's, the goat's), where
-    # the mesh ends at a chin a cropped human chin's step starts up to 0.16 behind the nose tip
-    throat = THROAT if end_back <= THROAT else NECK_THROAT
-    if expected < points[:, 1].min() and back[pick] > throat:
+    # a throat's step starts further back than any chin's; where a neck goes on below the profile an
+    # animal's throat steps start from 0.13 (the ogre's, the goat's), where the mesh ends at a chin a
+    # cropped human chin's step starts up to 0.16 behind the nose tip
+    if expected < points[:, 1].min() and back[pick] > (THROAT if ends_at_chin else NECK_THROAT):
         # a head long, not tall (a snout): its length is no cranium's, the chin it expects lies
         # below the mesh, and the step nearest that starts far behind the face: a throat's or the
         # neck cut's (the cow's chin was taken 0.24 head sizes under its menton). A lower jaw ends
