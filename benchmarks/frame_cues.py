@@ -21,8 +21,9 @@ two readings can be tried against all of them at once:
 - ``face`` / ``neck``: the best overlay score of the face-only reading (against the reference's front parts)
   and of the head stood on the opening, where the head was taken for a face-only capture.
 
-The closing lines give each cue's range over neck cuts (openings whose normal is within 45 degrees of the
-landmarks' down) and over openings facing backwards or up, among rows whose frame is right or wrong.
+The closing lines give each cue's range over the rows whose frame is right and those whose frame is wrong, by
+the opening's true kind: ``bottom`` (its normal within 45 degrees of the landmarks' down: a neck cut, a chin
+crop), ``back`` (within 45 degrees of their back: a cut behind the ears) or ``other``.
 """
 from __future__ import annotations
 
@@ -94,13 +95,13 @@ def row(name, vname, V, F, lm):
     check = frame.front_check or {}
     c.update(err=err, told=check.get("told_by", "-"), close=bool(check.get("close")))
     loop = c["loop"]
-    c["kind"] = ("none" if loop is None else "neck" if loop @ -truth["up"] > np.cos(np.radians(45))
+    c["kind"] = ("none" if loop is None else "bottom" if loop @ -truth["up"] > np.cos(np.radians(45))
                  else "back" if loop @ -truth["front"] > np.cos(np.radians(45)) else "other")
     fig = lambda k, f="{:.3f}": f.format(c[k]) if c.get(k) is not None else "-"  # noqa: E731
     text = (f"{name:20s} {vname:8s} {err:5.0f}° {'ok ' if err <= zc.FRAME_DEG else 'BAD'} {c['told']:15s} "
             f"{'close' if c['close'] else '     '} open {c['open']:.2f} "
             + ("loop -" if loop is None else f"loop {loop @ truth['front']:+.2f} / {loop @ truth['up']:+.2f}")
-            + f" {c['kind']:5s} planar {int(c['planar'])} share {fig('share')} wider {fig('wider', '{:.2f}')}"
+            + f" {c['kind']:6s} planar {int(c['planar'])} share {fig('share')} wider {fig('wider', '{:.2f}')}"
             f" face {fig('face')} neck {fig('neck')}")
     return text, c
 
@@ -108,7 +109,7 @@ def row(name, vname, V, F, lm):
 def ranges(rows):
     """Lines: each cue's range over the rows of each (opening kind, right / wrong frame) class."""
     out = []
-    for kind in ("neck", "back", "other"):
+    for kind in ("bottom", "back", "other"):
         for right in (True, False):
             group = [c for c in rows if c["kind"] == kind and (c["err"] <= zc.FRAME_DEG) == right]
             if not group:
