@@ -74,21 +74,23 @@ def cues_of(V, F, frame):
         out["share"] = cut_up_front(P, normal, offset, cues)[2]
         out["wider"] = widening(P, cues, normal, size)
     ref = default_reference()
-    candidates, parts, face_only = cut_candidates(P, normal, shape_candidates(P, normal, cues), cues, ref)
+    every = shape_candidates(P, normal, cues)
+    candidates, parts, face_only = cut_candidates(P, normal, every, cues, ref)
     if face_only:
         out["face"] = min(best_part_scores(P, candidates, parts)[0])
         if out["planar"]:
-            neck = [(u, f) for u, f in shape_candidates(P, normal, cues) if u @ -cues["loop_normal"] > 0.95]
+            neck = [(u, f) for u, f in every if u @ -cues["loop_normal"] > 0.95]
             out["neck"] = min(overlay_scores(P, neck, ref)) if neck else None
     return out
 
 
-def row(name, vname, V, F, lm):
-    """One printed row (str) and its figures (dict) for a copy of a landmarked head."""
+def row(name, vname, V, F, lm, ref):
+    """One printed row (str) and its figures (dict) for a copy of a landmarked head (``ref`` its landmarks'
+    frame, :func:`zoo_checks.landmark_frame`)."""
     var = zc.make_variant(vname, V, F, lm, zlib.crc32(name.encode()))
     if var is None:
         return None, None
-    truth = zoo.turned(zc.landmark_frame(V, F, lm), var.R)
+    truth = zoo.turned(ref, var.R)
     frame = detect_frame(var.V, var.F)
     err = max(zc.angle(frame.rotation[2], truth["front"]), zc.angle(frame.rotation[1], truth["up"]))
     c = cues_of(var.V, var.F, frame)
@@ -138,10 +140,11 @@ def main(argv=None):
             continue
         V, F = load_mesh(mesh)
         lm = {n: np.asarray(p, dtype=np.float64) for n, p in read_landmarks(lm_path).items()}
-        if zc.landmark_frame(V, F, lm) is None:
+        ref = zc.landmark_frame(V, F, lm)
+        if ref is None:
             continue
         for vname in args.variants.split(","):
-            text, c = row(name, vname, V, F, lm)
+            text, c = row(name, vname, V, F, lm, ref)
             if text is not None:
                 print(text, flush=True)
                 found.append(c)

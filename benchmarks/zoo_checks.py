@@ -79,23 +79,20 @@ def remesh(V, F):
 
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
     Vw, Fw = compact(*weld_by_size(V, F)[:2])
-    if _manifold(Fw):
+    manifold = igl.is_edge_manifold(Fw)[0]   # no edge on more than two triangles
+    if manifold:
         V, F = Vw, Fw
+    else:
+        manifold = igl.is_edge_manifold(F)[0]
     size = float(np.ptp(V[used_vertices(F, len(V))], axis=0).max())
     Vs = Fs = None
-    if _manifold(F):
+    if manifold:
         Vs, Fs = igl.loop(V, F)
         if np.linalg.norm(Vs - closest_points(Vs, V, F)[0], axis=1).max() > REMESH_OFF * size:
             Vs = Fs = None
     if Vs is None:
         Vs, Fs = trimesh.remesh.subdivide(V, F)
     return compact(*fast_simplification.simplify(Vs, Fs, target_count=len(F)))
-
-
-def _manifold(F):
-    """True when no edge of the triangles ``F`` (m, 3) lies on more than two of them."""
-    E = np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    return bool(np.unique(E, axis=0, return_counts=True)[1].max(initial=0) <= 2)
 
 
 def compact(V, F):
