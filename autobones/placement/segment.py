@@ -27,6 +27,7 @@ from scipy.cluster.hierarchy import fcluster
 
 from ..geometry.head_share import face_only, neck_base_height
 from ..geometry.sample import sample_surface
+from ..geometry.sections import section_points
 from ..geometry.topology import used_vertices
 from .joints import MASK_CHIN, Joints, find_joints, head_length, height_profile
 
@@ -37,6 +38,12 @@ JAW_FRONT = 0.1       # head sizes: a long head's chin step starts at most this 
 THROAT = 0.18         # head sizes: a step starting further behind the nose tip is a throat's (human chins 0.07-0.16)
 NECK_THROAT = 0.12    # head sizes: ... where a neck goes on below the profile (animal throats from 0.13; _chin_height)
 END_REACH = 5         # 1% bins: the profile's lowest stretch read for a chin the mesh ends at (_chin_height)
+STEP = 0.04           # head sizes: the profile's least drop over 3% of the height that is a step (_chin_height)
+SLOPE_STEP = 0.035    # ... that is a long head's jaw, starting within JAW_FRONT of the nose tip
+NOSE_LEVEL = 0.0      # head sizes: a step starting no further behind the nose tip is none of the chin's
+PROFILE_STRIP = 0.03  # head sizes: half-width of the midline strip the front profile is read in
+PROFILE_PLANES = 9    # sections across that strip, the profile's points
+PROFILE_SPACING = 0.0025   # head sizes: their points' spacing, a quarter of the profile's 1% bins
 
 FACE, MIDDLE, BACK = 0, 1, 2
 LABEL_NAMES = ("face", "middle", "back")
@@ -130,12 +137,15 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     # brings nose and chin forward into the top half head size (ICT at 10 degrees: +7%)
     length = head_length(prof, top, reach=CRANIUM * head_length(prof, top))
     cut, chin = -np.inf, None
-    # the midline profile from the sample and the mesh's own vertices near the midline: a 4,000-point
-    # sample leaves some 1% bins of the 3% strip with no skin point, and an inner mouth part behind
-    # the lips then reads as a 0.4-head-size step (a 0.2 degree tilt of the frame moved the cut above
-    # the chin of ICT's head)
     Vm = V[used_vertices(F, len(V))]
-    profile = np.vstack([S, Vm[np.abs(Vm[:, 0]) < 0.03]])
+    # the midline profile from the surface's own sections across the midline strip, points a quarter bin
+    # apart: a random sample and the vertices near the midline fill a 1% bin by chance and by the
+    # tessellation, and a bin with no skin point takes an inner part (ICT's mouth) or the back of the head
+    # (the koala's, 0.37 head sizes behind its front) as its front, a step that is not there. Read from
+    # them, the same surface split 1-to-4 put the cow's chin 0.45 head sizes lower, five sample seeds the
+    # goat's 0.04 or 0.25 under its nose tip (benchmarks/density.py); with the strip's own vertices, whose lowest is a cropped chin's point
+    across = np.linspace(-1.0, 1.0, PROFILE_PLANES) * (1.0 - 1e-3) * PROFILE_STRIP
+    profile = np.vstack([section_points(V, F, 0, across, PROFILE_SPACING), Vm[np.abs(Vm[:, 0]) < PROFILE_STRIP]])
     mask = face_only(V, F)
     # a face mask's chin lies at least MASK_CHIN of its height below its top (a step higher up is its
     # nose or lips): its depth is no cranium's length to expect the chin from (James' scan, which runs
@@ -343,11 +353,7 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     if valid.sum() < 4:
         return None
     front = np.interp(np.arange(len(front)), np.flatnonzero(valid), front[valid])
-    # drop over the next 3 bins (3% of head size of height)
-    drop = np.r_[front[:-3] - front[3:], np.zeros(3)]
-    peak = (drop >= 0.04) & (drop >= np.r_[0, drop[:-1]]) & (drop >= np.r_[drop[1:], 0])
-    ends = edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)]  # the underside of the step
-    back = front[0] - front[peak]   # how far behind the nose tip each step starts
+    ends, back = _profile_steps(front, edges, STEP)
     end_back = front[0] - front[-END_REACH:].max()
     ends_at_chin = end_back <= THROAT
     if ends_at_chin:
@@ -355,9 +361,18 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
         # step there, and the nearest one was its lips or nose base (ICT cut at the menton: 0.22-0.27
         # head sizes high; James' mask 0.23-0.28; fran_cut found none)
         ends, back = np.r_[ends, below[:, 1].min()], np.r_[back, end_back]
-    if len(ends) == 0:
-        return None
     expected = top - 1.2 * length
+    # a head long, not tall (a snout): its length is no cranium's and the chin it expects lies below the
+    # mesh. Its lower jaw ends under the face: the highest step that starts within JAW_FRONT of the nose
+    # tip (the zoo's animals' jaws 0.02-0.06 behind it, their throats 0.13-0.44; human chins 0.07-0.16),
+    # a slope's too (the cow's and the goat's jaws drop 0.037 and 0.038 head sizes over 3%)
+    slope_ends, slope_back = _profile_steps(front, edges, SLOPE_STEP)
+    snout = expected < points[:, 1].min()
+    jaw = slope_ends[slope_back <= JAW_FRONT] if snout else slope_ends[:0]
+    if snout and ends_at_chin and end_back <= JAW_FRONT:
+        jaw = np.r_[jaw, below[:, 1].min()]   # a snout cropped at its chin
+    if len(ends) == 0:
+        return float(jaw.max()) if len(jaw) else None
     if below_top is not None:
         keep = top - ends >= below_top
         ends, back = ends[keep], back[keep]
@@ -368,14 +383,26 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     pick = int(np.argmin(np.abs(ends - expected))) if below_top is None else int(np.argmin(ends))
     # a throat's step starts further back than any chin's; where a neck goes on below the profile an
     # animal's throat steps start from 0.13 (the ogre's, the goat's), where the mesh ends at a chin a
-    # cropped human chin's step starts up to 0.16 behind the nose tip
-    if expected < points[:, 1].min() and back[pick] > (THROAT if ends_at_chin else NECK_THROAT):
-        # a head long, not tall (a snout): its length is no cranium's, the chin it expects lies
-        # below the mesh, and the step nearest that starts far behind the face: a throat's or the
-        # neck cut's (the cow's chin was taken 0.24 head sizes under its menton). A lower jaw ends
-        # under the face: the highest step that starts within JAW_FRONT of the nose tip (the zoo's
-        # animals' jaws 0.03-0.06 behind it, their throats 0.13-0.44; human chins 0.07-0.16)
-        jaw = back <= JAW_FRONT
-        if jaw.any():
-            return float(ends[jaw].max())
+    # cropped human chin's step starts up to 0.16 behind the nose tip: on a snout the step nearest the
+    # expected height is then a throat's or the neck cut's (the cow's chin was taken 0.24 head sizes under
+    # its menton), and the jaw's is the chin
+    if len(jaw) and back[pick] > (THROAT if ends_at_chin else NECK_THROAT):
+        return float(jaw.max())
     return float(ends[pick])
+
+
+def _profile_steps(front, edges, least):
+    """(ends (k,), back (k,)): the steps of a midline front profile ``front`` (b,) (front-most depth of
+    each height bin from the nose tip down, bins starting at ``edges`` (b,)): where its drop over 3 bins
+    is a local maximum of at least ``least`` head sizes, the height of the step's underside and how far
+    behind the nose tip (``front[0]``) the step starts.
+
+    A step that starts level with the nose tip or ahead of it (``NOSE_LEVEL``) is a chest standing as far
+    forward (the springer's, 0.50 under its chin, was taken for it), never a chin (a beak's chin starts
+    0.01 behind its tip); nor one ending at the profile's last bin, the mesh's own lower edge curling
+    under (fsaverage's drops 0.036 there; a mesh that ends at its chin is read by ``ends_at_chin``)."""
+    drop = np.r_[front[:-3] - front[3:], np.zeros(3)]
+    back = front[0] - front
+    peak = (drop >= least) & (drop >= np.r_[0, drop[:-1]]) & (drop >= np.r_[drop[1:], 0]) & (back > NOSE_LEVEL)
+    peak[max(len(edges) - 4, 0):] = False
+    return edges[np.minimum(np.flatnonzero(peak) + 3, len(edges) - 1)], back[peak]
