@@ -37,7 +37,8 @@ def section_points(V, F, axis, offsets, spacing):
 
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    if len(F) == 0:
+    offsets = np.atleast_1d(np.asarray(offsets, dtype=np.float64))
+    if len(F) == 0 or len(offsets) == 0:
         return np.empty((0, 3))
     # only the triangles that reach the planes' span (a midline strip is a few % of a head)
     x = V[F, axis]
@@ -47,11 +48,14 @@ def section_points(V, F, axis, offsets, spacing):
     mesh = trimesh.Trimesh(V, F, process=False, validate=False)
     normal = np.eye(3)[axis]
     segments = [trimesh.intersections.mesh_plane(mesh, normal, normal * float(c)) for c in offsets]
-    S = np.concatenate([s.reshape(-1, 2, 3) for s in segments]) if segments else np.empty((0, 2, 3))
+    S = np.concatenate([s.reshape(-1, 2, 3) for s in segments])
     if len(S) == 0:
         return np.empty((0, 3))
     length = np.linalg.norm(S[:, 1] - S[:, 0], axis=1)
     steps = np.maximum(np.ceil(length / spacing).astype(np.int64), 1)
+    # each segment's steps + 1 points at fractions 0, 1/steps, ..., 1 along it: a point's fraction is its
+    # index less its segment's first index, over its segment's steps
     seg = np.repeat(np.arange(len(S)), steps + 1)
-    t = (np.arange(len(seg)) - np.repeat(np.cumsum(steps + 1) - (steps + 1), steps + 1)) / np.repeat(steps, steps + 1)
+    first = np.cumsum(steps + 1) - (steps + 1)
+    t = (np.arange(len(seg)) - first[seg]) / steps[seg]
     return S[seg, 0] + t[:, None] * (S[seg, 1] - S[seg, 0])

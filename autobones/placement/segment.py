@@ -143,7 +143,8 @@ def segment_head(V, F, sample_count=4000, seed=0, volume=None, pivot=None):
     # tessellation, and a bin with no skin point takes an inner part (ICT's mouth) or the back of the head
     # (the koala's, 0.37 head sizes behind its front) as its front, a step that is not there. Read from
     # them, the same surface split 1-to-4 put the cow's chin 0.45 head sizes lower, five sample seeds the
-    # goat's 0.04 or 0.25 under its nose tip (benchmarks/density.py); with the strip's own vertices, whose lowest is a cropped chin's point
+    # goat's 0.04 or 0.25 under its nose tip (benchmarks/density.py). The strip's own vertices join them:
+    # a cropped chin's point is the lowest vertex, which the sections pass between
     across = np.linspace(-1.0, 1.0, PROFILE_PLANES) * (1.0 - 1e-3) * PROFILE_STRIP
     profile = np.vstack([section_points(V, F, 0, across, PROFILE_SPACING), Vm[np.abs(Vm[:, 0]) < PROFILE_STRIP]])
     mask = face_only(V, F)
@@ -371,6 +372,8 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     jaw = slope_ends[slope_back <= JAW_FRONT] if snout else slope_ends[:0]
     if snout and ends_at_chin and end_back <= JAW_FRONT:
         jaw = np.r_[jaw, below[:, 1].min()]   # a snout cropped at its chin
+    if below_top is not None:
+        jaw = jaw[top - jaw >= below_top]     # a face mask's, as its steps below
     if len(ends) == 0:
         return float(jaw.max()) if len(jaw) else None
     if below_top is not None:
