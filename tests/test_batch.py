@@ -647,3 +647,33 @@ def test_output_folder_it_cannot_write_is_refused_up_front(tmp_path, where):
     assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
     assert "cannot write" in lines[0] and str(out) in lines[0]
     assert sorted(os.listdir(tmp_path / "in")) == ["robot.obj"]
+
+
+def test_each_failure_line_is_written_in_one_piece(tmp_path, monkeypatch):
+    """stderr writes through: a line written as its text and then its newline let a worker's warning land
+    between the two (CI: "autobones batch: inf.obj: ... (first: vertex 3)inconsistent_winding.obj: ...").
+    Each of the batch's own lines is one write, newline included."""
+    from cli.main import main as cli_main
+
+    src = tmp_path / "in"
+    src.mkdir()
+    (src / "cloud.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    (src / "empty.obj").write_text("")
+    writes = []
+
+    class Recorder:
+        def write(self, s):
+            writes.append(s)
+            return len(s)
+
+        def flush(self):
+            pass
+
+        def isatty(self):
+            return False
+
+    monkeypatch.setattr(sys, "stderr", Recorder())
+    code = cli_main(["batch", str(src), "-o", str(tmp_path / "out"), "--density", "sparse", "--jobs", "1", "--quiet"])
+    ours = [w for w in writes if w.startswith("autobones batch:")]
+    assert code == 1 and len(ours) == 2, writes
+    assert all(w.endswith("\n") and w.count("\n") == 1 for w in ours), ours
