@@ -367,11 +367,12 @@ def _chin_height(points, tip, length, top, below_top=None, strip=0.03, bin_size=
     # mesh. Its lower jaw ends under the face: the highest step that starts within JAW_FRONT of the nose
     # tip (the zoo's animals' jaws 0.02-0.06 behind it, their throats 0.13-0.44; human chins 0.07-0.16),
     # a slope's too (the cow's and the goat's jaws drop 0.037 and 0.038 head sizes over 3%)
-    slope_ends, slope_back = _profile_steps(front, edges, SLOPE_STEP)
-    snout = expected < points[:, 1].min()
-    jaw = slope_ends[slope_back <= JAW_FRONT] if snout else slope_ends[:0]
-    if snout and ends_at_chin and end_back <= JAW_FRONT:
-        jaw = np.r_[jaw, below[:, 1].min()]   # a snout cropped at its chin
+    jaw = np.empty(0)
+    if expected < points[:, 1].min():
+        slope_ends, slope_back = _profile_steps(front, edges, SLOPE_STEP)
+        jaw = slope_ends[slope_back <= JAW_FRONT]
+        if ends_at_chin and end_back <= JAW_FRONT:
+            jaw = np.r_[jaw, below[:, 1].min()]   # a snout cropped at its chin
     if below_top is not None:
         jaw = jaw[top - jaw >= below_top]     # a face mask's, as its steps below
     if len(ends) == 0:
